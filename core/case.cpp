@@ -1,0 +1,177 @@
+#include "core/case.hpp"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/json_reader.hpp"
+
+namespace core {
+namespace {
+
+constexpr double kMm = 1e-3;  // the schema's length unit
+
+double unit_to_metres(const JsonReader& r, const std::string& key) {
+  const std::string u = r.choice(key, {"mm", "cm", "m"}, std::string("mm"));
+  if (u == "mm") return 1e-3;
+  if (u == "cm") return 1e-2;
+  return 1.0;
+}
+
+GeometrySpec read_geometry(const JsonReader& r) {
+  GeometrySpec g;
+  const std::string source = r.choice("source", {"builtin_lung", "stl"});
+  if (source == "stl") {
+    g.source = GeometrySpec::Source::stl;
+    std::filesystem::path p = r.string("stl_file");
+    if (p.is_relative()) p = std::filesystem::path(r.file()).parent_path() / p;
+    g.stl_file = p.lexically_normal().string();
+    if (!std::filesystem::exists(g.stl_file))
+      r.fail("stl_file", fmt::format("expected an existing STL file, but \"{}\" does not exist", g.stl_file));
+    g.stl_unit_to_m = unit_to_metres(r, "length_unit");
+  }
+  g.mesh_size = r.in_range("mesh_size", 0.5, 200.0, true, true) * kMm;
+  r.finish();
+  return g;
+}
+
+KelvinParameters read_material(const JsonReader& r) {
+  KelvinParameters m;
+  m.K1 = r.positive("K1");
+  m.K2 = r.positive("K2");
+  m.eta = r.positive("eta");
+  m.nu = r.in_range("nu", -1.0, 0.5, false, false);
+  m.k = r.in_range("k", -1e3, 1e3, true, true, 0.0);
+  r.finish();
+  return m;
+}
+
+FixedRegionSpec read_fixed_region(const JsonReader& r) {
+  FixedRegionSpec f;
+  const std::string kind = r.choice("type", {"near_point", "near_plane"});
+  f.kind = kind == "near_point" ? FixedRegionSpec::Kind::near_point : FixedRegionSpec::Kind::near_plane;
+  f.point = r.vector3("point") * kMm;
+  if (f.kind == FixedRegionSpec::Kind::near_plane) {
+    const Eigen::Vector3d n = r.vector3("normal");
+    if (n.norm() < 1e-12) r.fail("normal", "expected a non-zero normal vector");
+    f.normal = n.normalized();
+  }
+  f.distance = r.positive("distance") * kMm;
+  r.finish();
+  return f;
+}
+
+LoadSpec read_load(const JsonReader& r) {
+  LoadSpec l;
+  l.point = r.vector3("point") * kMm;
+  l.radius = r.positive("radius") * kMm;
+  l.force = r.vector3("force");
+  if (l.force.norm() == 0.0) r.fail("force", "expected a non-zero force vector [N]");
+  l.ramp_time = r.in_range("ramp_time", 0.0, INFINITY, true, false, 1.0);
+  r.finish();
+  return l;
+}
+
+TimeSpec read_time(const JsonReader& r) {
+  TimeSpec t;
+  t.total = r.positive("total");
+  t.steps = r.integer("steps", 1, 100000);
+  r.finish();
+  return t;
+}
+
+SampleSpec read_samples(const JsonReader& r) {
+  SampleSpec s;
+  s.count = r.integer("count", 1, 1000, 10);
+  s.radius = r.positive("radius", 30.0) * kMm;
+  r.finish();
+  return s;
+}
+
+CutSpec read_cut(const JsonReader& r) {
+  CutSpec c;
+  c.polyline = r.vector3_list("polyline", 2);
+  for (auto& p : c.polyline) p *= kMm;
+  for (std::size_t i = 1; i < c.polyline.size(); ++i)
+    if ((c.polyline[i] - c.polyline[i - 1]).norm() < 1e-6)
+      r.fail("polyline", fmt::format("expected distinct consecutive points, but points {} and {} coincide",
+                                     i - 1, i));
+  c.depth = r.positive("depth") * kMm;
+  const Eigen::Vector3d d = r.vector3("direction");
+  if (d.norm() < 1e-12) r.fail("direction", "expected a non-zero depth direction");
+  c.direction = d.normalized();
+  r.finish();
+  return c;
+}
+
+MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_size) {
+  MeshlessSpec m;
+  m.node_spacing = fem_mesh_size;
+  if (!r) return m;
+  m.node_spacing = r->in_range("node_spacing", 0.5, 200.0, true, true, fem_mesh_size / kMm) * kMm;
+  m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, 2.0);
+  m.support_neighbours = r->integer("support_neighbours", 4, 100, 6);
+  m.quadrature_order = r->integer("quadrature_order", 1, 8, 2);
+  m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, 1e3);
+  m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, std::string("enrichment"));
+  r->finish();
+  return m;
+}
+
+FemSpec read_fem(const std::optional<JsonReader>& r) {
+  FemSpec f;
+  if (!r) return f;
+  f.degree = r->integer("degree", 1, 2, 2);
+  f.newton_tolerance = r->in_range("newton_tolerance", 0.0, 1e-2, false, true, 1e-8);
+  f.max_newton_iterations = r->integer("max_newton_iterations", 1, 200, 25);
+  r->finish();
+  return f;
+}
+
+OutputSpec read_output(const std::optional<JsonReader>& r) {
+  OutputSpec o;
+  if (!r) return o;
+  o.vtu = r->boolean("vtu", true);
+  o.every = r->integer("every", 1, 1000000, 1);
+  r->finish();
+  return o;
+}
+
+}  // namespace
+
+Case parse_case(const nlohmann::json& document, const std::string& file) {
+  JsonReader root(file, document, "");
+  Case c;
+  c.source_file = file;
+  c.document = document;
+  c.name = root.string("name");
+  if (c.name.empty()) root.fail("name", "expected a non-empty case name");
+  c.description = root.string("description", std::string());
+  c.geometry = read_geometry(root.object("geometry"));
+  c.material = read_material(root.object("material"));
+  c.fixed_region = read_fixed_region(root.object("fixed_region"));
+  c.load = read_load(root.object("load"));
+  c.time = read_time(root.object("time"));
+  if (auto s = root.optional_object("samples")) c.samples = read_samples(*s);
+  if (auto cut = root.optional_object("cut")) c.cut = read_cut(*cut);
+  c.meshless = read_meshless(root.optional_object("meshless"), c.geometry.mesh_size);
+  c.fem = read_fem(root.optional_object("fem"));
+  c.output = read_output(root.optional_object("output"));
+  root.finish();
+  return c;
+}
+
+Case load_case(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw CaseError(path, "", "cannot open the case file (does it exist and is it readable?)");
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/false);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw CaseError(path, "", fmt::format("expected valid JSON: {}", e.what()));
+  }
+  return parse_case(document, path);
+}
+
+}  // namespace core

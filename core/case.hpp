@@ -1,0 +1,106 @@
+#pragma once
+// The load case: everything one experiment needs, read from JSON with a strict schema (docs/CONFIG.md).
+//
+// Units: the JSON states lengths in millimetres, forces in newtons, moduli in pascals, viscosity in
+// pascal-seconds and times in seconds. Case stores SI (metres) so both models compute in SI; results
+// report displacements in mm, as the paper does.
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/case_error.hpp"
+#include "core/kelvin_law.hpp"
+
+namespace core {
+
+struct GeometrySpec {
+  enum class Source { builtin_lung, stl };
+  Source source = Source::builtin_lung;
+  std::string stl_file;           ///< absolute path, resolved against the config's folder
+  double stl_unit_to_m = 1e-3;    ///< metres per STL length unit
+  double mesh_size = 0.012;       ///< FEM tetrahedron size [m]
+};
+
+/// Which nodes are held fixed (essential boundary, eq. 19/23).
+struct FixedRegionSpec {
+  enum class Kind { near_point, near_plane };
+  Kind kind = Kind::near_point;
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< [m]
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< unit, for near_plane
+  double distance = 0.0;                              ///< [m]
+};
+
+/// Traction patch: the surface point nearest `point`, the faces within `radius`, total force ramped.
+struct LoadSpec {
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< [m]
+  double radius = 0.01;                             ///< [m]
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();  ///< total force at full load [N]
+  double ramp_time = 1.0;                           ///< [s]; force = min(t/ramp_time, 1) * force
+  double force_scale(double t) const { return ramp_time <= 0.0 ? 1.0 : std::min(t / ramp_time, 1.0); }
+};
+
+struct TimeSpec {
+  double total = 1.0;  ///< [s]
+  int steps = 10;
+  double dt() const { return total / steps; }
+};
+
+/// Sample points (paper §5.4): `count` surface points chosen deterministically near the load point.
+struct SampleSpec {
+  int count = 10;
+  double radius = 0.03;  ///< [m] outermost sample distance from the load centre
+};
+
+/// An incision: polyline of surface points swept along `direction` to `depth` (a ruled surface).
+struct CutSpec {
+  std::vector<Eigen::Vector3d> polyline;  ///< [m]
+  double depth = 0.0;                     ///< [m]
+  Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();  ///< unit
+};
+
+struct MeshlessSpec {
+  double node_spacing = 0.012;  ///< [m] target spacing of the node cloud
+  double support_factor = 2.0;  ///< d_max: rho_i = d_max * distance to the k-th nearest node
+  int support_neighbours = 6;   ///< k
+  int quadrature_order = 2;     ///< Gauss order per background tetrahedron
+  double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
+  std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
+};
+
+struct FemSpec {
+  int degree = 2;                   ///< FE_SimplexP degree
+  double newton_tolerance = 1e-8;   ///< relative residual
+  int max_newton_iterations = 25;
+};
+
+struct OutputSpec {
+  bool vtu = true;
+  int every = 1;  ///< write VTU every n-th step (the last step is always written)
+};
+
+struct Case {
+  std::string name;
+  std::string description;
+  std::string source_file;  ///< the config file it was read from
+  nlohmann::json document;  ///< the JSON exactly as read, written next to every result
+  GeometrySpec geometry;
+  KelvinParameters material;
+  FixedRegionSpec fixed_region;
+  LoadSpec load;
+  TimeSpec time;
+  SampleSpec samples;
+  std::optional<CutSpec> cut;
+  MeshlessSpec meshless;
+  FemSpec fem;
+  OutputSpec output;
+};
+
+/// Read and validate a case file. Throws CaseError (file, JSON path, what was expected).
+Case load_case(const std::string& path);
+
+/// Validate an in-memory document; `file` is used in messages and to resolve relative STL paths.
+Case parse_case(const nlohmann::json& document, const std::string& file);
+
+}  // namespace core

@@ -1,0 +1,375 @@
+#include "core/geometry.hpp"
+
+#include <fmt/format.h>
+#include <gmsh.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <queue>
+#include <unordered_map>
+
+#include "core/gmsh_session.hpp"
+
+namespace core {
+namespace {
+
+constexpr double kSnapTolerance = 0.010;          // points meant to be on the surface: within 10 mm
+constexpr double kBuiltinSurfaceSizeMm = 3.0;     // resolution of the built-in lung's reference surface
+
+// ---------------------------------------------------------------------------------------------------
+// Gmsh model construction (lengths in the model's own unit: mm for the built-in lung, the STL's unit)
+
+/// A lung-lobe-like solid of about 14 x 17 x 25 cm: an ellipsoid with a flattened medial (mediastinal)
+/// face and a concave diaphragmatic base. Returns the OCC volume tag.
+int add_builtin_lung() {
+  const int body = gmsh::model::occ::addSphere(0, 0, 0, 1);
+  gmsh::model::occ::dilate({{3, body}}, 0, 0, 0, 78, 85, 135);
+  const int medial = gmsh::model::occ::addBox(62, -300, -300, 300, 600, 600);
+  const int diaphragm = gmsh::model::occ::addSphere(0, 0, -135 - 170 + 30, 170);
+  gmsh::vectorpair out;
+  std::vector<gmsh::vectorpair> out_map;
+  gmsh::model::occ::cut({{3, body}}, {{3, medial}, {3, diaphragm}}, out, out_map);
+  gmsh::model::occ::synchronize();
+  if (out.size() != 1 || out[0].first != 3) throw std::runtime_error("built-in lung: boolean cut failed");
+  return out[0].second;
+}
+
+/// Read the current mesh's triangles (all surfaces) into a TriangleSurface scaled to metres.
+TriangleSurface extract_surface_triangles(double to_m) {
+  std::vector<std::size_t> elem_tags, node_tags;
+  gmsh::model::mesh::getElementsByType(2, elem_tags, node_tags);
+  std::vector<std::size_t> all_tags;
+  std::vector<double> coords, param;
+  gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
+  std::unordered_map<std::size_t, int> index;
+  TriangleSurface s;
+  std::vector<Eigen::Vector3d> pts;
+  std::unordered_map<std::size_t, std::size_t> tag_to_coord;
+  for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
+  s.triangles.resize(static_cast<Eigen::Index>(node_tags.size() / 3), 3);
+  for (std::size_t k = 0; k < node_tags.size(); ++k) {
+    auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(pts.size()));
+    if (inserted) {
+      const std::size_t c = tag_to_coord.at(node_tags[k]);
+      pts.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
+    }
+    s.triangles(static_cast<Eigen::Index>(k / 3), static_cast<Eigen::Index>(k % 3)) = it->second;
+  }
+  s.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) s.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
+  return s;
+}
+
+/// Make the triangle orientation consistent across shared edges, then outward (positive volume).
+void orient_outward(TriangleSurface* s) {
+  const int n = static_cast<int>(s->triangles.rows());
+  std::map<std::pair<int, int>, std::vector<int>> edge_faces;
+  for (int t = 0; t < n; ++t)
+    for (int e = 0; e < 3; ++e) {
+      int i = s->triangles(t, e), j = s->triangles(t, (e + 1) % 3);
+      edge_faces[{std::min(i, j), std::max(i, j)}].push_back(t);
+    }
+  auto has_directed_edge = [&](int t, int i, int j) {
+    for (int e = 0; e < 3; ++e)
+      if (s->triangles(t, e) == i && s->triangles(t, (e + 1) % 3) == j) return true;
+    return false;
+  };
+  std::vector<char> seen(n, 0);
+  for (int seed = 0; seed < n; ++seed) {
+    if (seen[seed]) continue;
+    seen[seed] = 1;
+    std::queue<int> q;
+    q.push(seed);
+    while (!q.empty()) {
+      const int t = q.front();
+      q.pop();
+      for (int e = 0; e < 3; ++e) {
+        const int i = s->triangles(t, e), j = s->triangles(t, (e + 1) % 3);
+        for (int nb : edge_faces[{std::min(i, j), std::max(i, j)}]) {
+          if (nb == t || seen[nb]) continue;
+          // consistent neighbours traverse the shared edge in opposite directions
+          if (has_directed_edge(nb, i, j)) std::swap(s->triangles(nb, 1), s->triangles(nb, 2));
+          seen[nb] = 1;
+          q.push(nb);
+        }
+      }
+    }
+  }
+  if (s->enclosed_volume() < 0)
+    for (int t = 0; t < n; ++t) std::swap(s->triangles(t, 1), s->triangles(t, 2));
+}
+
+void set_mesh_options(double size) {
+  gmsh::option::setNumber("General.NumThreads", 1);  // deterministic meshes
+  gmsh::option::setNumber("Mesh.MeshSizeMax", size);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", size / 4);
+  gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
+  gmsh::option::setNumber("Mesh.Algorithm", 6);
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::option::setNumber("Mesh.Optimize", 1);
+  gmsh::option::setNumber("Mesh.ElementOrder", 1);
+}
+
+/// Mesh the current model's volume at `size` (model units) and return linear tets in metres.
+TetMesh mesh_volume(double size, double to_m) {
+  gmsh::model::mesh::clear();
+  set_mesh_options(size);
+  gmsh::model::mesh::generate(3);
+  std::vector<std::size_t> elem_tags, node_tags;
+  gmsh::model::mesh::getElementsByType(4, elem_tags, node_tags);
+  std::vector<std::size_t> all_tags;
+  std::vector<double> coords, param;
+  gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
+  std::unordered_map<std::size_t, std::size_t> tag_to_coord;
+  for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
+
+  TetMesh mesh;
+  std::unordered_map<std::size_t, int> index;
+  std::vector<Eigen::Vector3d> pts;
+  mesh.tets.resize(static_cast<Eigen::Index>(node_tags.size() / 4), 4);
+  for (std::size_t k = 0; k < node_tags.size(); ++k) {
+    auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(pts.size()));
+    if (inserted) {
+      const std::size_t c = tag_to_coord.at(node_tags[k]);
+      pts.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
+    }
+    mesh.tets(static_cast<Eigen::Index>(k / 4), static_cast<Eigen::Index>(k % 4)) = it->second;
+  }
+  mesh.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) mesh.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
+  return mesh;
+}
+
+/// Orient tets positively and collect the boundary faces (faces used by exactly one tet), outward.
+void finish_topology(TetMesh* mesh) {
+  for (int t = 0; t < mesh->num_tets(); ++t) {
+    const auto v = mesh->tets.row(t);
+    if (tet_volume(mesh->vertices.row(v(0)), mesh->vertices.row(v(1)), mesh->vertices.row(v(2)),
+                   mesh->vertices.row(v(3))) < 0)
+      std::swap(mesh->tets(t, 2), mesh->tets(t, 3));
+  }
+  // Faces opposite vertex 0..3 of a positive tet, ordered so the normal points away from that vertex.
+  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  struct Entry {
+    std::array<int, 3> key;
+    std::array<int, 3> oriented;
+  };
+  std::vector<Entry> faces;
+  faces.reserve(4 * mesh->num_tets());
+  for (int t = 0; t < mesh->num_tets(); ++t)
+    for (const auto& f : kFace) {
+      Entry e;
+      e.oriented = {mesh->tets(t, f[0]), mesh->tets(t, f[1]), mesh->tets(t, f[2])};
+      e.key = e.oriented;
+      std::sort(e.key.begin(), e.key.end());
+      faces.push_back(e);
+    }
+  std::sort(faces.begin(), faces.end(), [](const Entry& a, const Entry& b) { return a.key < b.key; });
+  std::vector<std::array<int, 3>> boundary;
+  for (std::size_t i = 0; i < faces.size();) {
+    std::size_t j = i;
+    while (j < faces.size() && faces[j].key == faces[i].key) ++j;
+    if (j - i == 1) boundary.push_back(faces[i].oriented);
+    i = j;
+  }
+  mesh->boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
+  for (std::size_t f = 0; f < boundary.size(); ++f)
+    for (int k = 0; k < 3; ++k) mesh->boundary_faces(static_cast<Eigen::Index>(f), k) = boundary[f][k];
+  mesh->face_tags.assign(boundary.size(), FaceTag::free_surface);
+  mesh->vertex_fixed.assign(mesh->num_vertices(), 0);
+}
+
+bool in_fixed_region(const FixedRegionSpec& r, const Eigen::Vector3d& x) {
+  if (r.kind == FixedRegionSpec::Kind::near_point) return (x - r.point).norm() <= r.distance;
+  return std::abs((x - r.point).dot(r.normal)) <= r.distance;
+}
+
+/// Tag fixed and load faces; errors name the case file and the JSON path of the selector.
+void tag_regions(const Case& c, const Eigen::Vector3d& load_centre, const Eigen::Vector3d& load_normal,
+                 const char* which, TetMesh* mesh) {
+  int n_fixed = 0, n_load = 0, n_overlap = 0;
+  for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
+    bool all_fixed = true;
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d x = mesh->vertices.row(mesh->boundary_faces(f, k));
+      all_fixed = all_fixed && in_fixed_region(c.fixed_region, x);
+      centroid += x / 3.0;
+    }
+    const Eigen::Vector3d a = mesh->vertices.row(mesh->boundary_faces(f, 0));
+    const Eigen::Vector3d b = mesh->vertices.row(mesh->boundary_faces(f, 1));
+    const Eigen::Vector3d cc = mesh->vertices.row(mesh->boundary_faces(f, 2));
+    const Eigen::Vector3d normal = (b - a).cross(cc - a).normalized();
+    const bool in_load = (centroid - load_centre).norm() <= c.load.radius && normal.dot(load_normal) > 0.0;
+    if (all_fixed) {
+      mesh->face_tags[f] = FaceTag::fixed;
+      for (int k = 0; k < 3; ++k) mesh->vertex_fixed[mesh->boundary_faces(f, k)] = 1;
+      ++n_fixed;
+      if (in_load) ++n_overlap;
+    } else if (in_load) {
+      mesh->face_tags[f] = FaceTag::load;
+      ++n_load;
+    }
+  }
+  if (n_fixed == 0)
+    throw CaseError(c.source_file, "/fixed_region",
+                    fmt::format("selects no boundary face of the {} (every face needs its three vertices "
+                                "inside the region); expected a larger distance or a point on the surface",
+                                which));
+  if (n_load == 0)
+    throw CaseError(c.source_file, "/load/radius",
+                    fmt::format("the load patch holds no boundary face of the {}; expected a radius larger "
+                                "than the mesh size ({:.3g} mm)",
+                                which, c.load.radius * 1e3));
+  if (n_overlap > 0)
+    throw CaseError(c.source_file, "/load",
+                    "the load patch overlaps the fixed region; expected them to be disjoint");
+}
+
+/// Deterministic sample points (paper §5.4): a sunflower spiral in the tangent plane at the load
+/// centre, projected onto the reference surface.
+PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spec, const Eigen::Vector3d& centre,
+                           const Eigen::Vector3d& normal) {
+  Eigen::Vector3d helper = Eigen::Vector3d::UnitX();
+  if (std::abs(normal.x()) > 0.9) helper = Eigen::Vector3d::UnitY();
+  const Eigen::Vector3d t1 = normal.cross(helper).normalized();
+  const Eigen::Vector3d t2 = normal.cross(t1);
+  const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  PointMatrix samples(spec.count, 3);
+  for (int i = 0; i < spec.count; ++i) {
+    const double r = spec.radius * std::sqrt((i + 0.5) / spec.count);
+    const double theta = i * golden_angle;
+    const Eigen::Vector3d q = centre + r * (std::cos(theta) * t1 + std::sin(theta) * t2);
+    samples.row(i) = surface.closest_point(q).point.transpose();
+  }
+  return samples;
+}
+
+/// Build the Gmsh model for the case; returns model units -> metres, fills the reference surface.
+double build_model(const Case& c, TriangleSurface* surface, double* reference_volume) {
+  gmsh::model::add(c.name);
+  if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
+    const int volume = add_builtin_lung();
+    double mass = 0.0;
+    gmsh::model::occ::getMass(3, volume, mass);
+    if (reference_volume) *reference_volume = mass * 1e-9;
+    set_mesh_options(kBuiltinSurfaceSizeMm);
+    gmsh::model::mesh::generate(2);
+    *surface = extract_surface_triangles(1e-3);
+    orient_outward(surface);
+    gmsh::model::mesh::clear();
+    return 1e-3;
+  }
+  const double to_m = c.geometry.stl_unit_to_m;
+  const std::string& file = c.geometry.stl_file;
+  try {
+    gmsh::merge(file);
+  } catch (const std::exception& e) {
+    throw CaseError(c.source_file, "/geometry/stl_file",
+                    fmt::format("expected a readable STL surface, but Gmsh could not read \"{}\": {}", file,
+                                e.what()));
+  } catch (...) {
+    throw CaseError(c.source_file, "/geometry/stl_file",
+                    fmt::format("expected a readable STL surface, but Gmsh could not read \"{}\"", file));
+  }
+  *surface = extract_surface_triangles(to_m);
+  if (surface->triangles.rows() < 4)
+    throw CaseError(c.source_file, "/geometry/stl_file",
+                    fmt::format("expected a closed triangulated surface, but \"{}\" holds {} triangles", file,
+                                surface->triangles.rows()));
+  const int open_edges = surface->count_non_manifold_edges();
+  if (open_edges > 0)
+    throw CaseError(c.source_file, "/geometry/stl_file",
+                    fmt::format("expected a closed surface (every edge shared by exactly two triangles), but "
+                                "\"{}\" has {} open or non-manifold edges",
+                                file, open_edges));
+  orient_outward(surface);
+  if (reference_volume) *reference_volume = surface->enclosed_volume();
+  // The paper's CT -> STL pipeline: classify the triangulation into patches, rebuild a geometry that can
+  // be remeshed at any size, close it with a surface loop and fill it with a volume.
+  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+  gmsh::model::mesh::createGeometry();
+  gmsh::vectorpair surfaces;
+  gmsh::model::getEntities(surfaces, 2);
+  std::vector<int> tags;
+  for (const auto& s : surfaces) tags.push_back(s.second);
+  const int loop = gmsh::model::geo::addSurfaceLoop(tags);
+  gmsh::model::geo::addVolume({loop});
+  gmsh::model::geo::synchronize();
+  return to_m;
+}
+
+SurfacePoint snap(const Case& c, const TriangleSurface& s, const Eigen::Vector3d& x, double tolerance,
+                  const std::string& json_path, const char* what) {
+  const SurfacePoint p = s.closest_point(x);
+  if (p.distance > tolerance)
+    throw CaseError(c.source_file, json_path,
+                    fmt::format("{} is {:.1f} mm from the body surface; expected a point on the surface "
+                                "(within {:.1f} mm)",
+                                what, p.distance * 1e3, tolerance * 1e3));
+  return p;
+}
+
+}  // namespace
+
+TriangleSurface build_reference_surface(const Case& c, double* reference_volume) {
+  GmshSession session;
+  TriangleSurface surface;
+  build_model(c, &surface, reference_volume);
+  return surface;
+}
+
+Geometry build_geometry(const Case& c, const GeometryOptions& options) {
+  GmshSession session;
+  Geometry g;
+  const double to_m = build_model(c, &g.surface, &g.reference_volume);
+
+  // Cheap checks on the exact surface first, so a bad case fails before any volume meshing.
+  const double load_tolerance = std::max(c.load.radius, kSnapTolerance);
+  const SurfacePoint load = snap(c, g.surface, c.load.point, load_tolerance, "/load/point", "the load point");
+  g.load_centre = load.point;
+  g.load_normal = load.normal;
+  if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
+    const SurfacePoint p = g.surface.closest_point(c.fixed_region.point);
+    if (p.distance > c.fixed_region.distance)
+      throw CaseError(c.source_file, "/fixed_region",
+                      fmt::format("selects no part of the surface: the point is {:.1f} mm from the surface but "
+                                  "the distance is {:.1f} mm; expected a distance larger than that",
+                                  p.distance * 1e3, c.fixed_region.distance * 1e3));
+  }
+  if (c.cut) {
+    std::vector<Eigen::Vector3d> top;
+    for (std::size_t i = 0; i < c.cut->polyline.size(); ++i)
+      top.push_back(snap(c, g.surface, c.cut->polyline[i], kSnapTolerance,
+                         "/cut/polyline/" + std::to_string(i), "the cut point")
+                        .point);
+    const SurfacePoint first = g.surface.closest_point(top.front());
+    if (first.normal.dot(c.cut->direction) > 0.0)
+      throw CaseError(c.source_file, "/cut/direction",
+                      "points out of the body at the first cut point; expected a direction into the tissue");
+    try {
+      g.cut.emplace(top, c.cut->direction, c.cut->depth);
+    } catch (const std::invalid_argument& e) {
+      throw CaseError(c.source_file, "/cut", std::string("expected a valid incision: ") + e.what());
+    }
+  }
+  g.sample_points = choose_samples(g.surface, c.samples, g.load_centre, g.load_normal);
+
+  if (options.build_fem_mesh) {
+    const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
+    g.fem_mesh = mesh_volume(h / to_m, to_m);
+    finish_topology(&g.fem_mesh);
+    tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
+  }
+  if (options.build_node_cloud) {
+    g.meshless_mesh = mesh_volume(c.meshless.node_spacing / to_m, to_m);
+    finish_topology(&g.meshless_mesh);
+    tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
+  }
+  return g;
+}
+
+}  // namespace core

@@ -1,0 +1,24 @@
+#include "core/gmsh_session.hpp"
+
+#include <gmsh.h>
+
+#include <stdexcept>
+
+namespace core {
+
+static bool g_session_alive = false;
+
+GmshSession::GmshSession() {
+  if (g_session_alive) throw std::logic_error("GmshSession: a Gmsh session is already open");
+  gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
+  gmsh::option::setNumber("General.Terminal", 0);
+  gmsh::option::setNumber("General.Verbosity", 1);
+  g_session_alive = true;
+}
+
+GmshSession::~GmshSession() {
+  gmsh::finalize();
+  g_session_alive = false;
+}
+
+}  // namespace core

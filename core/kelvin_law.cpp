@@ -1,0 +1,156 @@
+// Nonlinear Kelvin viscoelastic law of Zhang et al. 2020, §2, eqs. 9–13 (see core/kelvin_law.hpp and
+// docs/MATERIAL.md for the full reading).
+//
+// Summary of the discretisation implemented here:
+//  * Relaxation modulus of the standard linear solid (Fig. 2; spring K1 in series with K2 || eta):
+//        E(t) = E_inf + (K1 - E_inf) exp(-t/tau),  E_inf = K1 K2/(K1+K2),  tau = eta/(K1+K2).
+//    Normalised kernel g(t) = E(t)/K1 = g_inf + (1 - g_inf) exp(-t/tau).
+//  * Eq. 10 in 3-D:  sigma(t) = int_0^t g(t-s) C0 : dN/ds ds,  N(eps) = eps + k eps.eps,  C0 = C(K1, nu).
+//  * Because the kernel is one exponential plus a constant, sigma splits into an elastic part and one
+//    decaying internal stress h:
+//        sigma = g_inf C0 N(eps) + h,   h(t) = (1 - g_inf) int_0^t exp(-(t-s)/tau) C0 dN/ds ds.
+//    Splitting the integral at t_n (eq. 12) gives the exact recursion, assuming dN/ds is constant on
+//    (t_n, t_{n+1}] (N linear in time within the step):
+//        h_{n+1} = exp(-dt/tau) h_n + (1 - g_inf) phi(dt) C0 (N_{n+1} - N_n),
+//        phi(dt) = (tau/dt) (1 - exp(-dt/tau)),  phi(0) = 1.
+//    Hence the incremental form of eq. 13:  Delta sigma = E_k Delta N + sigma_0 with
+//        E_k = [g_inf + (1 - g_inf) phi] C0   (times dN/deps to act on Delta eps),
+//        sigma_0 = (exp(-dt/tau) - 1) h_n.
+#include "core/kelvin_law.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace core {
+
+namespace {
+
+// Builds "KelvinLaw: <what> (got <value>)" so that a bad input names itself in the exception.
+std::string describe(const std::string& what, double value) {
+  std::ostringstream out;
+  out.precision(17);
+  out << "KelvinLaw: " << what << " (got " << value << ")";
+  return out.str();
+}
+
+void require_positive(const char* name, double value) {
+  // `!(value > 0)` also rejects NaN.
+  if (!(value > 0.0) || !std::isfinite(value)) {
+    throw std::invalid_argument(describe(std::string(name) + " must be finite and > 0", value));
+  }
+}
+
+bool all_finite(const Vector6& v) { return v.allFinite(); }
+
+}  // namespace
+
+double KelvinParameters::relaxation_modulus(double t) const {
+  const double e_inf = equilibrium_modulus();
+  return e_inf + (K1 - e_inf) * std::exp(-t / relaxation_time());
+}
+
+KelvinLaw::KelvinLaw(const KelvinParameters& parameters) : parameters_(parameters) {
+  require_positive("K1", parameters_.K1);
+  require_positive("K2", parameters_.K2);
+  require_positive("eta", parameters_.eta);
+  // nu = 0.5 makes lambda infinite (incompressible); nu <= -1 makes the shear modulus non-positive.
+  if (!(parameters_.nu > -1.0 && parameters_.nu < 0.5)) {
+    throw std::invalid_argument(describe("nu must satisfy -1 < nu < 0.5", parameters_.nu));
+  }
+  if (!std::isfinite(parameters_.k)) {
+    throw std::invalid_argument(describe("k must be finite", parameters_.k));
+  }
+  C0_ = elastic_matrix(parameters_.K1);
+}
+
+Matrix6 KelvinLaw::elastic_matrix(double youngs_modulus) const {
+  const double nu = parameters_.nu;
+  const double lambda = youngs_modulus * nu / ((1.0 + nu) * (1.0 - 2.0 * nu));
+  const double mu = youngs_modulus / (2.0 * (1.0 + nu));
+  Matrix6 c = Matrix6::Zero();
+  c.topLeftCorner<3, 3>().setConstant(lambda);
+  c.topLeftCorner<3, 3>().diagonal().array() += 2.0 * mu;
+  // Strain vectors carry engineering shear gamma = 2 eps, so sigma_xy = 2 mu eps_xy = mu gamma_xy.
+  c.bottomRightCorner<3, 3>().diagonal().setConstant(mu);
+  return c;
+}
+
+Vector6 KelvinLaw::adjusted_strain(const Vector6& strain) const {
+  // Tensor form N = eps + k eps.eps (the 3-D reading of the 1-D N = eps + k eps^2 in eq. 10). It is an
+  // isotropic tensor function, so N(R eps R^T) = R N(eps) R^T: the law is frame-indifferent. A
+  // component-wise square of the Voigt vector would not be (and would mix engineering factors of 2).
+  const Matrix3 e = voigt_to_strain(strain);
+  const Matrix3 n = e + parameters_.k * (e * e);
+  return strain_to_voigt(n);
+}
+
+Matrix6 KelvinLaw::adjusted_strain_jacobian(const Vector6& strain) const {
+  // dN = de + k (de.e + e.de) is linear in de, so column j of dN/deps is the engineering Voigt image of
+  // that expression for de = voigt_to_strain(unit vector j). Going through voigt_to_strain handles the
+  // halving of engineering shear on input and strain_to_voigt the doubling on output, which is the
+  // easy thing to get wrong when writing this 6x6 matrix by hand.
+  const Matrix3 e = voigt_to_strain(strain);
+  const double k = parameters_.k;
+  Matrix6 jacobian;
+  for (int j = 0; j < 6; ++j) {
+    const Matrix3 de = voigt_to_strain(Vector6::Unit(j));
+    jacobian.col(j) = strain_to_voigt(de + k * (de * e + e * de));
+  }
+  return jacobian;
+}
+
+double KelvinLaw::step_modulus_factor(double dt) const {
+  const double tau = parameters_.relaxation_time();
+  const double g_inf = parameters_.equilibrium_modulus() / parameters_.K1;
+  const double a = dt / tau;
+  // phi = (1 - exp(-a))/a; -expm1 keeps full precision as a -> 0, and a = 0 is the instantaneous limit.
+  const double phi = (a > 0.0) ? -std::expm1(-a) / a : 1.0;
+  return g_inf + (1.0 - g_inf) * phi;
+}
+
+KelvinResponse KelvinLaw::update(const KelvinState& old_state, const Vector6& strain_new, double dt,
+                                 KelvinState* new_state) const {
+  // Reject inputs that would otherwise propagate NaN silently into a global solve.
+  if (!(dt >= 0.0) || !std::isfinite(dt)) {
+    throw std::invalid_argument(describe("time step dt must be finite and >= 0", dt));
+  }
+  if (!all_finite(strain_new)) {
+    throw std::invalid_argument("KelvinLaw::update: strain_new has a non-finite component");
+  }
+  if (!all_finite(old_state.strain) || !all_finite(old_state.viscous_stress)) {
+    throw std::invalid_argument("KelvinLaw::update: old_state holds a non-finite strain or viscous stress");
+  }
+
+  const double tau = parameters_.relaxation_time();
+  const double g_inf = parameters_.equilibrium_modulus() / parameters_.K1;
+  const double a = dt / tau;
+  const double decay = std::exp(-a);                         // exp(-dt/tau)
+  const double phi = (a > 0.0) ? -std::expm1(-a) / a : 1.0;  // (tau/dt)(1 - exp(-dt/tau))
+
+  // N_n is recomputed from the stored strain rather than read from old_state.adjusted_strain, so a state
+  // built by hand (e.g. a prestrain with zero history) is always self-consistent.
+  const Vector6 n_old = adjusted_strain(old_state.strain);
+  const Vector6 n_new = adjusted_strain(strain_new);
+
+  // Eq. 12: history part decays exactly, the new increment is integrated against the kernel on the step.
+  const Vector6 h_new = decay * old_state.viscous_stress + (1.0 - g_inf) * phi * (C0_ * (n_new - n_old));
+  const Vector6 stress = g_inf * (C0_ * n_new) + h_new;
+
+  KelvinResponse response;
+  response.stress = stress;
+  // d sigma_{n+1}/d eps_{n+1} = [g_inf + (1 - g_inf) phi] C0 dN/deps: E_k of eq. 13 including the
+  // adjustment-function Jacobian. Not symmetric when k != 0 (C0 J != J^T C0 in general).
+  response.tangent = (g_inf + (1.0 - g_inf) * phi) * (C0_ * adjusted_strain_jacobian(strain_new));
+
+  if (new_state != nullptr) {
+    new_state->strain = strain_new;
+    new_state->adjusted_strain = n_new;
+    new_state->viscous_stress = h_new;
+    new_state->stress = stress;
+  }
+  return response;
+}
+
+}  // namespace core

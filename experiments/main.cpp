@@ -1,0 +1,30 @@
+// tissue: the command-line front end of the harness (see README.md and docs/ARCHITECTURE.md).
+#include <CLI/CLI.hpp>
+#include <fmt/format.h>
+
+#include <iostream>
+
+#include "core/case_error.hpp"
+#include "experiments/case_commands.hpp"
+#include "experiments/progress.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "tissue 0.1.0");
+  experiments::add_case_commands(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const experiments::CommandResult& r) {
+    return r.exit_code;
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const core::CaseError& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,28 @@
+#pragma once
+// Progress lines on stderr for anything that may take more than a few seconds:
+//   [case mesh 1/3] building geometry and meshes (Gmsh) ... (0.0 s)
+#include <chrono>
+#include <string>
+
+namespace experiments {
+
+/// Thrown from a CLI11 callback to hand the exit code back to main().
+struct CommandResult {
+  int exit_code;
+};
+
+class Progress {
+ public:
+  Progress(std::string task, int total_steps);
+  void step(const std::string& what);  ///< announce the next step
+  void done();                         ///< announce completion with the elapsed time
+  double elapsed_seconds() const;
+
+ private:
+  std::string task_;
+  int total_;
+  int current_ = 0;
+  std::chrono::steady_clock::time_point start_;
+};
+
+}  // namespace experiments
