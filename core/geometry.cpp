@@ -115,7 +115,6 @@ void set_mesh_options(double size) {
 
 /// Mesh the current model's volume at `size` (model units) and return linear tets in metres.
 TetMesh mesh_volume(double size, double to_m) {
-  gmsh::model::mesh::clear();
   set_mesh_options(size);
   gmsh::model::mesh::generate(3);
   std::vector<std::size_t> elem_tags, node_tags;
@@ -248,49 +247,92 @@ PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spe
   return samples;
 }
 
-/// Build the Gmsh model for the case; returns model units -> metres, fills the reference surface.
-double build_model(const Case& c, TriangleSurface* surface, double* reference_volume) {
-  gmsh::model::add(c.name);
-  if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
-    const int volume = add_builtin_lung();
-    double mass = 0.0;
-    gmsh::model::occ::getMass(3, volume, mass);
-    if (reference_volume) *reference_volume = mass * 1e-9;
-    set_mesh_options(kBuiltinSurfaceSizeMm);
-    gmsh::model::mesh::generate(2);
-    *surface = extract_surface_triangles(1e-3);
-    orient_outward(surface);
-    gmsh::model::mesh::clear();
-    return 1e-3;
+/// Split every triangle into four (edge midpoints) until no edge is longer than `size`. The STL is the
+/// exact, piecewise-flat surface, so subdivision refines the boundary without changing the geometry.
+TriangleSurface subdivide(TriangleSurface s, double size) {
+  auto longest_edge = [](const TriangleSurface& t) {
+    double longest = 0.0;
+    for (int f = 0; f < t.triangles.rows(); ++f)
+      for (int e = 0; e < 3; ++e)
+        longest = std::max(longest, (t.vertices.row(t.triangles(f, e)) - t.vertices.row(t.triangles(f, (e + 1) % 3))).norm());
+    return longest;
+  };
+  while (longest_edge(s) > size) {
+    std::map<std::pair<int, int>, int> midpoint;
+    std::vector<Eigen::Vector3d> pts;
+    for (int i = 0; i < s.vertices.rows(); ++i) pts.emplace_back(s.vertices.row(i));
+    auto mid = [&](int i, int j) {
+      const std::pair<int, int> key{std::min(i, j), std::max(i, j)};
+      auto it = midpoint.find(key);
+      if (it != midpoint.end()) return it->second;
+      pts.push_back(0.5 * (pts[i] + pts[j]));
+      return midpoint[key] = static_cast<int>(pts.size()) - 1;
+    };
+    TriMatrix tris(4 * s.triangles.rows(), 3);
+    for (int f = 0; f < s.triangles.rows(); ++f) {
+      const int a = s.triangles(f, 0), b = s.triangles(f, 1), c = s.triangles(f, 2);
+      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      tris.row(4 * f) << a, ab, ca;
+      tris.row(4 * f + 1) << ab, b, bc;
+      tris.row(4 * f + 2) << ca, bc, c;
+      tris.row(4 * f + 3) << ab, bc, ca;
+    }
+    s.triangles = tris;
+    s.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
+    for (std::size_t i = 0; i < pts.size(); ++i) s.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
   }
-  const double to_m = c.geometry.stl_unit_to_m;
+  return s;
+}
+
+/// Read, check and orient the STL surface (metres). Errors point at /geometry/stl_file.
+TriangleSurface load_stl_surface(const Case& c) {
   const std::string& file = c.geometry.stl_file;
   try {
     gmsh::merge(file);
-  } catch (const std::exception& e) {
-    throw CaseError(c.source_file, "/geometry/stl_file",
-                    fmt::format("expected a readable STL surface, but Gmsh could not read \"{}\": {}", file,
-                                e.what()));
   } catch (...) {
     throw CaseError(c.source_file, "/geometry/stl_file",
                     fmt::format("expected a readable STL surface, but Gmsh could not read \"{}\"", file));
   }
-  *surface = extract_surface_triangles(to_m);
-  if (surface->triangles.rows() < 4)
+  TriangleSurface surface = extract_surface_triangles(c.geometry.stl_unit_to_m);
+  gmsh::clear();
+  if (surface.triangles.rows() < 4)
     throw CaseError(c.source_file, "/geometry/stl_file",
                     fmt::format("expected a closed triangulated surface, but \"{}\" holds {} triangles", file,
-                                surface->triangles.rows()));
-  const int open_edges = surface->count_non_manifold_edges();
+                                surface.triangles.rows()));
+  const int open_edges = surface.count_non_manifold_edges();
   if (open_edges > 0)
     throw CaseError(c.source_file, "/geometry/stl_file",
                     fmt::format("expected a closed surface (every edge shared by exactly two triangles), but "
                                 "\"{}\" has {} open or non-manifold edges",
                                 file, open_edges));
-  orient_outward(surface);
-  if (reference_volume) *reference_volume = surface->enclosed_volume();
-  // The paper's CT -> STL pipeline: classify the triangulation into patches, rebuild a geometry that can
-  // be remeshed at any size, close it with a surface loop and fill it with a volume.
-  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, true, M_PI);
+  orient_outward(&surface);
+  return surface;
+}
+
+/// The paper's CT -> STL pipeline: hand the (subdivided) STL triangulation to Gmsh as a discrete surface,
+/// classify it into patches without reparametrisation (the triangles are kept exactly), close it with a
+/// surface loop and fill it with a volume. Model units are metres.
+///
+/// Why not remesh the surface: in Gmsh 4.8, reparametrised remeshing of classified STL patches can fail
+/// inside an OpenMP region ("Unable to recover the edge"), which terminates the process.
+void add_stl_volume(const TriangleSurface& surface, double size) {
+  gmsh::clear();
+  const TriangleSurface fine = subdivide(surface, size);
+  const int tag = gmsh::model::addDiscreteEntity(2);
+  std::vector<std::size_t> node_tags(static_cast<std::size_t>(fine.vertices.rows()));
+  std::vector<double> coords;
+  for (Eigen::Index i = 0; i < fine.vertices.rows(); ++i) {
+    node_tags[static_cast<std::size_t>(i)] = static_cast<std::size_t>(i + 1);
+    for (int k = 0; k < 3; ++k) coords.push_back(fine.vertices(i, k));
+  }
+  gmsh::model::mesh::addNodes(2, tag, node_tags, coords);
+  std::vector<std::size_t> element_tags, element_nodes;
+  for (Eigen::Index f = 0; f < fine.triangles.rows(); ++f) {
+    element_tags.push_back(static_cast<std::size_t>(f + 1));
+    for (int k = 0; k < 3; ++k) element_nodes.push_back(static_cast<std::size_t>(fine.triangles(f, k) + 1));
+  }
+  gmsh::model::mesh::addElementsByType(tag, 2, element_tags, element_nodes);
+  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, false, M_PI);
   gmsh::model::mesh::createGeometry();
   gmsh::vectorpair surfaces;
   gmsh::model::getEntities(surfaces, 2);
@@ -299,7 +341,41 @@ double build_model(const Case& c, TriangleSurface* surface, double* reference_vo
   const int loop = gmsh::model::geo::addSurfaceLoop(tags);
   gmsh::model::geo::addVolume({loop});
   gmsh::model::geo::synchronize();
-  return to_m;
+}
+
+/// Reference surface and volume for the case (the Gmsh model is left empty for STL input).
+TriangleSurface reference_surface(const Case& c, double* reference_volume) {
+  if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
+    gmsh::clear();
+    const int volume = add_builtin_lung();
+    double mass = 0.0;
+    gmsh::model::occ::getMass(3, volume, mass);
+    if (reference_volume) *reference_volume = mass * 1e-9;
+    set_mesh_options(kBuiltinSurfaceSizeMm);
+    gmsh::model::mesh::generate(2);
+    TriangleSurface surface = extract_surface_triangles(1e-3);
+    orient_outward(&surface);
+    gmsh::model::mesh::clear();
+    return surface;
+  }
+  TriangleSurface surface = load_stl_surface(c);
+  if (reference_volume) *reference_volume = surface.enclosed_volume();
+  return surface;
+}
+
+/// Tetrahedra of the case's body at `size` [m].
+TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size) {
+  TetMesh mesh;
+  if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
+    gmsh::clear();
+    add_builtin_lung();
+    mesh = mesh_volume(size / 1e-3, 1e-3);
+  } else {
+    add_stl_volume(surface, size);
+    mesh = mesh_volume(size, 1.0);
+  }
+  finish_topology(&mesh);
+  return mesh;
 }
 
 SurfacePoint snap(const Case& c, const TriangleSurface& s, const Eigen::Vector3d& x, double tolerance,
@@ -317,15 +393,13 @@ SurfacePoint snap(const Case& c, const TriangleSurface& s, const Eigen::Vector3d
 
 TriangleSurface build_reference_surface(const Case& c, double* reference_volume) {
   GmshSession session;
-  TriangleSurface surface;
-  build_model(c, &surface, reference_volume);
-  return surface;
+  return reference_surface(c, reference_volume);
 }
 
 Geometry build_geometry(const Case& c, const GeometryOptions& options) {
   GmshSession session;
   Geometry g;
-  const double to_m = build_model(c, &g.surface, &g.reference_volume);
+  g.surface = reference_surface(c, &g.reference_volume);
 
   // Cheap checks on the exact surface first, so a bad case fails before any volume meshing.
   const double load_tolerance = std::max(c.load.radius, kSnapTolerance);
@@ -360,13 +434,11 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
-    g.fem_mesh = mesh_volume(h / to_m, to_m);
-    finish_topology(&g.fem_mesh);
+    g.fem_mesh = mesh_body(c, g.surface, h);
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
   }
   if (options.build_node_cloud) {
-    g.meshless_mesh = mesh_volume(c.meshless.node_spacing / to_m, to_m);
-    finish_topology(&g.meshless_mesh);
+    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing);
     tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
   }
   return g;

@@ -2,6 +2,7 @@
 
 #include <gmsh.h>
 
+#include <cstdlib>
 #include <stdexcept>
 
 namespace core {
@@ -11,8 +12,8 @@ static bool g_session_alive = false;
 GmshSession::GmshSession() {
   if (g_session_alive) throw std::logic_error("GmshSession: a Gmsh session is already open");
   gmsh::initialize(0, nullptr, /*readConfigFiles=*/false);
-  gmsh::option::setNumber("General.Terminal", 0);
-  gmsh::option::setNumber("General.Verbosity", 1);
+  gmsh::option::setNumber("General.Terminal", std::getenv("TISSUE_GMSH_VERBOSE") ? 1 : 0);
+  gmsh::option::setNumber("General.Verbosity", std::getenv("TISSUE_GMSH_VERBOSE") ? 5 : 1);
   g_session_alive = true;
 }
 

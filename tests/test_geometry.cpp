@@ -1,0 +1,144 @@
+// Geometry pipeline: volumes against Gmsh / STL references, tagging invariants, determinism.
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <filesystem>
+#include <map>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+
+namespace {
+
+const std::string kConfigDir = TISSUE_TEST_CONFIG_DIR;
+
+/// Every edge of the boundary is shared by two faces, and the faces point outwards: by the divergence
+/// theorem, (1/3) sum over faces of (x . n) dA equals the enclosed volume.
+void expect_closed_outward_boundary(const core::TetMesh& mesh) {
+  std::map<std::pair<int, int>, int> edges;
+  double flux = 0.0;
+  for (int f = 0; f < mesh.boundary_faces.rows(); ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.boundary_faces(f, 0));
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.boundary_faces(f, 1));
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.boundary_faces(f, 2));
+    flux += a.dot((b - a).cross(c - a)) / 6.0;
+    for (int e = 0; e < 3; ++e) {
+      int i = mesh.boundary_faces(f, e), j = mesh.boundary_faces(f, (e + 1) % 3);
+      ++edges[{std::min(i, j), std::max(i, j)}];
+    }
+  }
+  for (const auto& [edge, count] : edges) ASSERT_EQ(count, 2) << "boundary edge used " << count << " times";
+  EXPECT_NEAR(flux, mesh.volume(), 1e-9 * mesh.volume());
+}
+
+TEST(BuiltinLung, TetVolumeMatchesGmshMassWithinHalfPercent) {
+  const core::Case c = core::load_case(kConfigDir + "/lung_small.json");
+  const core::Geometry g = core::build_geometry(c);
+  ASSERT_GT(g.reference_volume, 0.0);
+  const double fem_error = std::abs(g.fem_mesh.volume() - g.reference_volume) / g.reference_volume;
+  const double cloud_error = std::abs(g.meshless_mesh.volume() - g.reference_volume) / g.reference_volume;
+  RecordProperty("fem_volume_relative_error", std::to_string(fem_error));
+  RecordProperty("cloud_volume_relative_error", std::to_string(cloud_error));
+  std::cout << "built-in lung: Gmsh mass " << g.reference_volume * 1e6 << " cm^3, FEM tets "
+            << g.fem_mesh.volume() * 1e6 << " cm^3 (" << fem_error * 100 << " %), cloud cells "
+            << g.meshless_mesh.volume() * 1e6 << " cm^3 (" << cloud_error * 100 << " %)\n";
+  EXPECT_LT(fem_error, 5e-3);
+  EXPECT_LT(cloud_error, 5e-3);
+  // About 15 x 17 x 25 cm, the size of a lung lobe.
+  const Eigen::Vector3d extent = g.surface.vertices.colwise().maxCoeff() - g.surface.vertices.colwise().minCoeff();
+  EXPECT_NEAR(extent.x(), 0.14, 0.015);
+  EXPECT_NEAR(extent.y(), 0.17, 0.015);
+  EXPECT_NEAR(extent.z(), 0.25, 0.02);
+  // The reference surface is closed and encloses the same volume.
+  EXPECT_EQ(g.surface.count_non_manifold_edges(), 0);
+  EXPECT_NEAR(g.surface.enclosed_volume(), g.reference_volume, 5e-3 * g.reference_volume);
+  expect_closed_outward_boundary(g.fem_mesh);
+  expect_closed_outward_boundary(g.meshless_mesh);
+}
+
+TEST(BuiltinLung, RegionsAreTaggedConsistently) {
+  const core::Case c = core::load_case(kConfigDir + "/lung_small.json");
+  const core::Geometry g = core::build_geometry(c);
+  for (const core::TetMesh* mesh : {&g.fem_mesh, &g.meshless_mesh}) {
+    // Fixed faces lie within the selector; the load patch is a disc of radius r around the load centre:
+    // its area is close to pi r^2 (a faceted, slightly curved disc with ragged edges).
+    for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
+      if (mesh->face_tags[f] != core::FaceTag::fixed) continue;
+      for (int k = 0; k < 3; ++k)
+        EXPECT_LE((Eigen::Vector3d(mesh->vertices.row(mesh->boundary_faces(f, k))) - c.fixed_region.point).norm(),
+                  c.fixed_region.distance + 1e-12);
+    }
+    const double area = mesh->tagged_area(core::FaceTag::load);
+    const double disc = M_PI * c.load.radius * c.load.radius;
+    EXPECT_GT(area, 0.4 * disc);
+    EXPECT_LT(area, 1.6 * disc);
+    EXPECT_GT(mesh->tagged_area(core::FaceTag::fixed), 0.0);
+  }
+  // The load centre and every sample lie on the reference surface, within the sampling radius.
+  EXPECT_LT(g.surface.closest_point(g.load_centre).distance, 1e-9);
+  ASSERT_EQ(g.sample_points.rows(), c.samples.count);
+  for (int i = 0; i < g.sample_points.rows(); ++i) {
+    const Eigen::Vector3d p = g.sample_points.row(i);
+    EXPECT_LT(g.surface.closest_point(p).distance, 1e-9);
+    EXPECT_LE((p - g.load_centre).norm(), c.samples.radius * 1.2);
+  }
+}
+
+TEST(BuiltinLung, SamplePointsAndMeshesAreIdenticalAcrossRuns) {
+  const core::Case c = core::load_case(kConfigDir + "/lung_small.json");
+  core::GeometryOptions options;
+  options.build_node_cloud = false;
+  const core::Geometry a = core::build_geometry(c, options);
+  const core::Geometry b = core::build_geometry(c, options);
+  ASSERT_EQ(a.sample_points.rows(), b.sample_points.rows());
+  EXPECT_EQ((a.sample_points - b.sample_points).cwiseAbs().maxCoeff(), 0.0);
+  ASSERT_EQ(a.fem_mesh.num_vertices(), b.fem_mesh.num_vertices());
+  EXPECT_EQ((a.fem_mesh.vertices - b.fem_mesh.vertices).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_EQ(a.fem_mesh.tets, b.fem_mesh.tets);
+}
+
+TEST(BuiltinLung, CutIsSnappedToTheSurfaceAsARuledSurface) {
+  const core::Case c = core::load_case(kConfigDir + "/lung_large.json");
+  core::GeometryOptions options;
+  options.build_fem_mesh = false;
+  options.build_node_cloud = false;
+  const core::Geometry g = core::build_geometry(c, options);
+  ASSERT_TRUE(g.cut.has_value());
+  EXPECT_EQ(g.cut->num_panels(), static_cast<int>(c.cut->polyline.size()) - 1);
+  for (const auto& p : g.cut->top()) EXPECT_LT(g.surface.closest_point(p).distance, 1e-9);
+  // A ruled surface: each panel's area is |segment x depth direction| * depth.
+  double expected = 0.0;
+  for (int i = 0; i < g.cut->num_panels(); ++i)
+    expected += (g.cut->top()[i + 1] - g.cut->top()[i]).cross(c.cut->direction).norm() * c.cut->depth;
+  EXPECT_NEAR(g.cut->area(), expected, 1e-12);
+  // Points on either side of a panel have opposite signs of s; the mid-panel point has s = 0.
+  const Eigen::Vector3d mid = 0.5 * (g.cut->top()[0] + g.cut->top()[1]) + 0.5 * c.cut->depth * c.cut->direction;
+  const core::CutCoordinates on = g.cut->coordinates(mid, 0);
+  EXPECT_NEAR(on.s, 0.0, 1e-12);
+  EXPECT_NEAR(on.depth, 0.5 * c.cut->depth, 1e-12);
+  const Eigen::Vector3d n = g.cut->panel_normal(0);
+  EXPECT_GT(g.cut->coordinates(mid + 1e-3 * n, 0).s, 0.0);
+  EXPECT_LT(g.cut->coordinates(mid - 1e-3 * n, 0).s, 0.0);
+  EXPECT_NEAR(g.cut->distance(mid + 2e-3 * n), 2e-3, 1e-12);
+}
+
+TEST(RealLobe, TetVolumeMatchesStlEnclosedVolumeWithinOnePercent) {
+  const std::string stl = std::string(TISSUE_SHARED_DATA_DIR) + "/lung/lower_lobe_of_left_lung_surface.stl";
+  if (!std::filesystem::exists(stl)) GTEST_SKIP() << "real lung STL not found at " << stl << " (../shared absent)";
+  const core::Case c = core::load_case(kConfigDir + "/lung_stl.json");
+  const core::Geometry g = core::build_geometry(c);
+  EXPECT_EQ(g.surface.count_non_manifold_edges(), 0);
+  ASSERT_GT(g.reference_volume, 0.0);
+  const double error = std::abs(g.fem_mesh.volume() - g.reference_volume) / g.reference_volume;
+  std::cout << "real lobe: STL-enclosed " << g.reference_volume * 1e6 << " cm^3, tets " << g.fem_mesh.volume() * 1e6
+            << " cm^3 (" << error * 100 << " %), " << g.fem_mesh.num_tets() << " tets\n";
+  RecordProperty("stl_volume_relative_error", std::to_string(error));
+  EXPECT_LT(error, 1e-2);
+  expect_closed_outward_boundary(g.fem_mesh);
+  // Bounding box from the data README: about 144 x 166 x 263 mm.
+  const Eigen::Vector3d extent = g.surface.vertices.colwise().maxCoeff() - g.surface.vertices.colwise().minCoeff();
+  EXPECT_NEAR(extent.x(), 0.1436, 0.002);
+  EXPECT_NEAR(extent.z(), 0.2632, 0.002);
+}
+
+}  // namespace
