@@ -1,0 +1,35 @@
+#!/usr/bin/env bash
+# Install the Debian 12 packages the harness needs, only when some are missing.
+# Uses sudo when not root. Safe to run repeatedly.
+set -euo pipefail
+
+PACKAGES=(
+  build-essential cmake pkg-config
+  libeigen3-dev libdeal.ii-dev libgmsh-dev libceres-dev
+  libgtest-dev libbenchmark-dev libfmt-dev nlohmann-json3-dev
+  libnanoflann-dev libcli11-dev
+  python3 python3-matplotlib
+)
+
+missing=()
+for p in "${PACKAGES[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "[deps] all ${#PACKAGES[@]} Debian packages present"
+  exit 0
+fi
+
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  if command -v sudo >/dev/null 2>&1; then SUDO="sudo"; else
+    echo "[deps] missing packages (${missing[*]}) and not root, and sudo is not available" >&2
+    exit 1
+  fi
+fi
+echo "[deps] installing: ${missing[*]}"
+$SUDO apt-get update -q
+DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -q --no-install-recommends "${missing[@]}"

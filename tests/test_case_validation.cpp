@@ -1,0 +1,211 @@
+// Bad input: every mistake a user can make in a case file gives one clear error that names the file,
+// the JSON path and what was expected, exits non-zero, and leaves no output behind.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+const std::string kTissue = TISSUE_BINARY;
+const std::string kConfigDir = TISSUE_TEST_CONFIG_DIR;
+
+struct RunResult {
+  int exit_code;
+  std::string output;  // stdout + stderr
+};
+
+RunResult run(const std::string& args) {
+  const std::string command = kTissue + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  EXPECT_NE(pipe, nullptr);
+  std::string output;
+  std::array<char, 4096> buffer{};
+  while (fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pclose(pipe);
+  return {WEXITSTATUS(status), output};
+}
+
+class BadCase : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+    dir_ = fs::temp_directory_path() / (std::string("tissue_bad_case_") + info->name() + "_" +
+                                        std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    std::ifstream in(kConfigDir + "/lung_small.json");
+    base_ = json::parse(in);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+
+  std::string write(const std::string& name, const std::string& text) {
+    const fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p.string();
+  }
+  std::string write_case(const json& document) { return write("case.json", document.dump(2)); }
+
+  /// Run `tissue case mesh` on `config` and check the error contract.
+  void expect_error(const std::string& config, const std::vector<std::string>& fragments) {
+    const fs::path out = dir_ / "results" / "out";
+    const RunResult r = run("case mesh " + config + " --out " + out.string());
+    EXPECT_NE(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("error: "), std::string::npos) << r.output;
+    EXPECT_NE(r.output.find(fs::path(config).filename().string()), std::string::npos)
+        << "message does not name the file:\n" << r.output;
+    for (const auto& f : fragments) EXPECT_NE(r.output.find(f), std::string::npos) << "missing '" << f << "' in:\n" << r.output;
+    // Nothing left behind: not the output folder, not its parent, no staging folder.
+    EXPECT_FALSE(fs::exists(dir_ / "results")) << "output left behind after a failed run";
+    for (const auto& entry : fs::directory_iterator(dir_))
+      EXPECT_EQ(entry.path().filename().string().find(".partial"), std::string::npos) << entry.path();
+  }
+
+  fs::path dir_;
+  json base_;
+};
+
+TEST_F(BadCase, MalformedJson) {
+  expect_error(write("case.json", "{ \"name\": \"x\", \"material\": { \"K1\": 1, } "), {"expected valid JSON"});
+}
+
+TEST_F(BadCase, UnknownKey) {
+  base_["material"]["K3"] = 5.0;
+  expect_error(write_case(base_), {"/material/K3", "unknown key", "K1"});
+}
+
+TEST_F(BadCase, WrongType) {
+  base_["time"]["steps"] = "ten";
+  expect_error(write_case(base_), {"/time/steps", "expected an integer", "string"});
+}
+
+TEST_F(BadCase, NegativeModulus) {
+  base_["material"]["K1"] = -6000.0;
+  expect_error(write_case(base_), {"/material/K1", "expected a number > 0", "-6000"});
+}
+
+TEST_F(BadCase, PoissonRatioAtLeastHalf) {
+  base_["material"]["nu"] = 0.5;
+  expect_error(write_case(base_), {"/material/nu", "(-1, 0.5)", "0.5"});
+}
+
+TEST_F(BadCase, MissingRequiredKey) {
+  base_["material"].erase("eta");
+  expect_error(write_case(base_), {"/material/eta", "required key is missing"});
+}
+
+TEST_F(BadCase, EmptyFixedRegion) {
+  base_["fixed_region"]["point"] = {62.0, 0.0, 10.0};
+  base_["fixed_region"]["distance"] = 0.5;
+  expect_error(write_case(base_), {"/fixed_region", "selects no"});
+}
+
+TEST_F(BadCase, FixedRegionFarFromTheBody) {
+  base_["fixed_region"]["point"] = {500.0, 0.0, 0.0};
+  expect_error(write_case(base_), {"/fixed_region", "from the surface"});
+}
+
+TEST_F(BadCase, LoadPointFarOutsideTheBody) {
+  base_["load"]["point"] = {-300.0, 0.0, 20.0};
+  expect_error(write_case(base_), {"/load/point", "from the body surface", "expected a point on the surface"});
+}
+
+TEST_F(BadCase, OpenStl) {
+  // A tetrahedron's surface with one face missing: three edges belong to a single triangle.
+  const std::string stl = write("open.stl",
+                                "solid open\n"
+                                "facet normal 0 0 -1\n outer loop\n  vertex 0 0 0\n  vertex 0 100 0\n  vertex 100 0 0\n endloop\nendfacet\n"
+                                "facet normal 0 -1 0\n outer loop\n  vertex 0 0 0\n  vertex 100 0 0\n  vertex 0 0 100\n endloop\nendfacet\n"
+                                "facet normal -1 0 0\n outer loop\n  vertex 0 0 0\n  vertex 0 0 100\n  vertex 0 100 0\n endloop\nendfacet\n"
+                                "endsolid open\n");
+  base_["geometry"] = {{"source", "stl"}, {"stl_file", "open.stl"}, {"length_unit", "mm"}, {"mesh_size", 10.0}};
+  expect_error(write_case(base_), {"/geometry/stl_file", "expected a closed", "open.stl"});
+  (void)stl;
+}
+
+TEST_F(BadCase, StlThatIsNotASurface) {
+  write("garbage.stl", "this is not an STL file\n");
+  base_["geometry"] = {{"source", "stl"}, {"stl_file", "garbage.stl"}, {"length_unit", "mm"}, {"mesh_size", 10.0}};
+  expect_error(write_case(base_), {"/geometry/stl_file", "garbage.stl"});
+}
+
+TEST_F(BadCase, MissingStlFile) {
+  base_["geometry"] = {{"source", "stl"}, {"stl_file", "nowhere.stl"}, {"length_unit", "mm"}, {"mesh_size", 10.0}};
+  expect_error(write_case(base_), {"/geometry/stl_file", "does not exist", "nowhere.stl"});
+}
+
+TEST_F(BadCase, MissingConfigFile) {
+  expect_error((dir_ / "no_such_case.json").string(), {"cannot open the case file"});
+}
+
+TEST_F(BadCase, CutOutsideTheBody) {
+  base_["cut"] = {{"polyline", {{-200.0, -25.0, 40.0}, {-200.0, 25.0, 40.0}}}, {"depth", 20.0}, {"direction", {1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/polyline/0", "from the body surface"});
+}
+
+TEST_F(BadCase, CutDirectionPointingOutOfTheBody) {
+  base_["cut"] = {{"polyline", {{-71.0, -25.0, 40.0}, {-71.0, 25.0, 40.0}}}, {"depth", 20.0}, {"direction", {-1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/direction", "into the tissue"});
+}
+
+TEST_F(BadCase, ZeroTimeSteps) {
+  base_["time"]["steps"] = 0;
+  expect_error(write_case(base_), {"/time/steps", "expected an integer in [1, 100000]", "got 0"});
+}
+
+TEST_F(BadCase, ZeroSampleCount) {
+  base_["samples"]["count"] = 0;
+  expect_error(write_case(base_), {"/samples/count", "expected an integer in [1, 1000]", "got 0"});
+}
+
+TEST_F(BadCase, UnknownGeometrySource) {
+  base_["geometry"]["source"] = "liver";
+  expect_error(write_case(base_), {"/geometry/source", "builtin_lung", "liver"});
+}
+
+TEST_F(BadCase, VectorWithTwoComponents) {
+  base_["load"]["force"] = {0.3, 0.0};
+  expect_error(write_case(base_), {"/load/force", "array of 3 numbers"});
+}
+
+// The good path, for contrast: the shipped configs pass `case check`.
+TEST(ShippedCases, PassCaseCheck) {
+  for (const char* name : {"lung_small.json", "lung_large.json"}) {
+    const RunResult r = run("case check " + kConfigDir + "/" + name);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    EXPECT_NE(r.output.find("sample points   10"), std::string::npos) << r.output;
+  }
+}
+
+TEST(ShippedCases, CaseMeshWritesVtuAndTheConfig) {
+  const fs::path out = fs::temp_directory_path() / ("tissue_case_mesh_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const RunResult r = run("case mesh " + kConfigDir + "/lung_large.json --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* f : {"fem_mesh_tets.vtu", "fem_mesh_boundary.vtu", "meshless_nodes.vtu", "meshless_cells_tets.vtu",
+                        "sample_points.vtu", "cut_surface.vtu", "case.json", "geometry.json"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  std::ifstream vtu(out / "fem_mesh_tets.vtu");
+  const std::string head((std::istreambuf_iterator<char>(vtu)), std::istreambuf_iterator<char>());
+  EXPECT_NE(head.find("<VTKFile type=\"UnstructuredGrid\""), std::string::npos);
+  std::ifstream written(out / "case.json");
+  EXPECT_EQ(json::parse(written)["name"], "lung_large");
+  fs::remove_all(out);
+}
+
+TEST(Cli, HelpOnEverySubcommand) {
+  for (const char* sub : {"", "case", "case check", "case mesh"}) {
+    const RunResult r = run(std::string(sub) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub << "\n" << r.output;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
+  }
+}
+
+}  // namespace
