@@ -7,10 +7,13 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <map>
+#include <optional>
 #include <queue>
 #include <unordered_map>
 
+#include "core/crack_embedding.hpp"
 #include "core/gmsh_session.hpp"
 
 namespace core {
@@ -18,6 +21,7 @@ namespace {
 
 constexpr double kSnapTolerance = 0.010;          // points meant to be on the surface: within 10 mm
 constexpr double kBuiltinSurfaceSizeMm = 3.0;     // resolution of the built-in lung's reference surface
+constexpr double kCrackExtension = 0.003;         // [m] the FEM cut reaches this far above the surface line
 
 // ---------------------------------------------------------------------------------------------------
 // Gmsh model construction (lengths in the model's own unit: mm for the built-in lung, the STL's unit)
@@ -114,9 +118,11 @@ void set_mesh_options(double size) {
 }
 
 /// Mesh the current model's volume at `size` (model units) and return linear tets in metres.
-TetMesh mesh_volume(double size, double to_m) {
+/// `after_generate` may edit the mesh before it is read (the FEM crack splits its nodes there).
+TetMesh mesh_volume(double size, double to_m, const std::function<void()>& after_generate = {}) {
   set_mesh_options(size);
   gmsh::model::mesh::generate(3);
+  if (after_generate) after_generate();
   std::vector<std::size_t> elem_tags, node_tags;
   gmsh::model::mesh::getElementsByType(4, elem_tags, node_tags);
   std::vector<std::size_t> all_tags;
@@ -364,13 +370,22 @@ TriangleSurface reference_surface(const Case& c, double* reference_volume) {
 }
 
 /// Tetrahedra of the case's body at `size` [m].
-TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size) {
+TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const RuledSurface* cut = nullptr) {
   TetMesh mesh;
   if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
     gmsh::clear();
-    add_builtin_lung();
-    mesh = mesh_volume(size / 1e-3, 1e-3);
+    const int volume = add_builtin_lung();
+    // The FEM crack (core/crack_embedding.hpp): embed the cut, mesh, then duplicate its nodes.
+    const std::optional<CrackEmbedding> crack =
+        cut ? std::optional(embed_cut_in_volume(volume, *cut, 1e-3, kCrackExtension)) : std::nullopt;
+    mesh = mesh_volume(size / 1e-3, 1e-3, [&] {
+      if (crack) split_crack_nodes(*crack);
+    });
   } else {
+    if (cut)
+      throw CaseError(c.source_file, "/cut",
+                      "cuts are supported for the built-in lung only (the FEM crack in an STL body is not "
+                      "implemented yet); expected no cut with an STL geometry");
     add_stl_volume(surface, size);
     mesh = mesh_volume(size, 1.0);
   }
@@ -434,8 +449,9 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
-    g.fem_mesh = mesh_body(c, g.surface, h);
+    g.fem_mesh = mesh_body(c, g.surface, h, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
+    if (g.cut) tag_crack_faces(*g.cut, kCrackExtension, &g.fem_mesh);
   }
   if (options.build_node_cloud) {
     g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing);

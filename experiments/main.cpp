@@ -7,12 +7,16 @@
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/solve_commands.hpp"
+#include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "tissue 0.1.0");
   experiments::add_case_commands(app);
+  experiments::add_solve_commands(app);
+  experiments::add_verify_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {
@@ -24,6 +28,9 @@ int main(int argc, char** argv) {
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::string& e) {  // the Gmsh SDK throws its last error as a string
+    std::cerr << "error: " << e << "\n";
     return 1;
   }
   return 0;

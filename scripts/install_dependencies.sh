@@ -7,7 +7,8 @@ PACKAGES=(
   build-essential cmake pkg-config
   libeigen3-dev libdeal.ii-dev libgmsh-dev libceres-dev
   libgtest-dev libbenchmark-dev libfmt-dev nlohmann-json3-dev
-  libnanoflann-dev libcli11-dev
+  libnanoflann-dev libcli11-dev libsuitesparse-dev
+  libopenblas0-pthread   # fast BLAS for UMFPACK (both models factorise with it)
   python3 python3-matplotlib
 )
 

@@ -1,0 +1,205 @@
+#include "core/crack_embedding.hpp"
+
+#include <gmsh.h>
+
+#include <algorithm>
+#include <array>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+#include "core/gmsh_session.hpp"
+
+namespace core {
+namespace {
+
+constexpr int kCrackGroup = 9001;
+constexpr int kOpenBoundaryGroup = 9002;
+
+gmsh::vectorpair boundary_of(const gmsh::vectorpair& entities, bool combined) {
+  gmsh::vectorpair out;
+  gmsh::model::getBoundary(entities, out, combined, false, false);
+  for (auto& e : out) e.second = std::abs(e.second);
+  return out;
+}
+
+}  // namespace
+
+CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, double to_m, double extend) {
+  namespace occ = gmsh::model::occ;
+  // One planar quad per panel (top segment swept along the depth direction), sharing the vertical
+  // edges so the cut surface is conforming across the polyline's kinks. Loops run top_i -> top_{i+1}
+  // -> bottom_{i+1} -> bottom_i on every panel, so all panels (and their mesh triangles) share one
+  // orientation: the Crack plugin averages their normals at shared nodes.
+  const Eigen::Vector3d d = cut.direction();
+  std::vector<int> top, bottom, vertical;
+  for (const Eigen::Vector3d& p : cut.top()) {
+    const Eigen::Vector3d a = (p - extend * d) / to_m, b = (p + cut.depth() * d) / to_m;
+    top.push_back(occ::addPoint(a.x(), a.y(), a.z()));
+    bottom.push_back(occ::addPoint(b.x(), b.y(), b.z()));
+    vertical.push_back(occ::addLine(top.back(), bottom.back()));
+  }
+  gmsh::vectorpair tools;
+  for (int i = 0; i < cut.num_panels(); ++i) {
+    const int upper = occ::addLine(top[i], top[i + 1]);
+    const int lower = occ::addLine(bottom[i + 1], bottom[i]);
+    const int loop = occ::addCurveLoop({upper, vertical[i + 1], lower, -vertical[i]});
+    tools.emplace_back(2, occ::addPlaneSurface({loop}));
+  }
+  gmsh::vectorpair out;
+  std::vector<gmsh::vectorpair> out_map;
+  occ::fragment({{3, volume_tag}}, tools, out, out_map);
+  occ::synchronize();
+
+  // Keep the pieces below the surface line (inside the body); the extension above it is deleted.
+  std::set<int> kept;
+  gmsh::vectorpair outside;
+  for (std::size_t k = 1; k < out_map.size(); ++k)
+    for (const auto& piece : out_map[k]) {
+      if (piece.first != 2) continue;
+      double x, y, z;
+      occ::getCenterOfMass(2, piece.second, x, y, z);
+      const CutCoordinates cc = cut.nearest_panel_coordinates(Eigen::Vector3d(x, y, z) * to_m);
+      if (cc.depth > 0.0)
+        kept.insert(piece.second);
+      else
+        outside.push_back(piece);
+    }
+  if (!outside.empty()) {
+    occ::remove(outside, true);
+    occ::synchronize();
+  }
+  if (kept.empty()) throw std::runtime_error("crack embedding: no part of the cut surface lies inside the body");
+
+  CrackEmbedding e;
+  e.num_surfaces = static_cast<int>(kept.size());
+  e.crack_group = gmsh::model::addPhysicalGroup(2, std::vector<int>(kept.begin(), kept.end()), kCrackGroup);
+
+  // Curves of the cut that lie on the body's outer surface: the cut opens there, so the Crack plugin
+  // must split their nodes too. The other boundary curves (the crack front inside the body) stay shared.
+  gmsh::vectorpair crack_surfaces;
+  for (int s : kept) crack_surfaces.emplace_back(2, s);
+  gmsh::vectorpair volumes;
+  gmsh::model::getEntities(volumes, 3);
+  gmsh::vectorpair outer;
+  for (const auto& s : boundary_of(volumes, false))
+    if (!kept.count(s.second)) outer.push_back(s);
+  std::set<int> outer_curves;
+  for (const auto& c : boundary_of(outer, false)) outer_curves.insert(c.second);
+  std::vector<int> open;
+  for (const auto& c : boundary_of(crack_surfaces, true)) {
+    // On the outer surface: a boundary curve of an outer face, or a curve embedded in one (OCC keeps a
+    // cut line that ends inside a face as an internal edge of that face, which getBoundary omits).
+    std::vector<int> up, down;
+    gmsh::model::getAdjacencies(1, c.second, up, down);
+    bool on_outer = outer_curves.count(c.second) > 0;
+    for (int s : up) on_outer = on_outer || !kept.count(s);
+    if (on_outer) open.push_back(c.second);
+  }
+  if (!open.empty()) e.open_boundary_group = gmsh::model::addPhysicalGroup(1, open, kOpenBoundaryGroup);
+  return e;
+}
+
+void split_crack_nodes(const CrackEmbedding& embedding) {
+  gmsh::plugin::setNumber("Crack", "Dimension", 2);
+  gmsh::plugin::setNumber("Crack", "PhysicalGroup", embedding.crack_group);
+  gmsh::plugin::setNumber("Crack", "OpenBoundaryPhysicalGroup", embedding.open_boundary_group);
+  gmsh::plugin::run("Crack");
+}
+
+int tag_crack_faces(const RuledSurface& cut, double extend, TetMesh* mesh) {
+  // A face is on the cut when its vertices and centroid lie on one panel's plane, inside the panel
+  // (the surface line may bulge a little above the straight top segment, hence `extend`).
+  const double tolerance = 1e-6;  // [m]; OCC puts the nodes on the planar panels to round-off
+  auto on_panel = [&](const Eigen::Vector3d& x, int panel) {
+    const CutCoordinates c = cut.coordinates(x, panel);
+    return std::abs(c.s) < tolerance && c.zeta > -tolerance && c.zeta < c.length + tolerance &&
+           c.depth > -extend - tolerance && c.depth < cut.depth() + tolerance;
+  };
+  int count = 0;
+  for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
+    Eigen::Vector3d x[3], centroid = Eigen::Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      x[k] = mesh->vertices.row(mesh->boundary_faces(f, k)).transpose();
+      centroid += x[k] / 3.0;
+    }
+    for (int p = 0; p < cut.num_panels(); ++p)
+      if (on_panel(centroid, p) && on_panel(x[0], p) && on_panel(x[1], p) && on_panel(x[2], p)) {
+        mesh->face_tags[f] = FaceTag::crack;
+        ++count;
+        break;
+      }
+  }
+  return count;
+}
+
+TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const RuledSurface& cut,
+                           double size) {
+  constexpr double to_m = 1e-3;  // model in mm, like the built-in lung
+  constexpr double extend = 2e-3;
+  GmshSession session;
+  gmsh::model::add("cracked_block");
+  const Eigen::Vector3d a = lo / to_m, ext = (hi - lo) / to_m;
+  const int box = gmsh::model::occ::addBox(a.x(), a.y(), a.z(), ext.x(), ext.y(), ext.z());
+  gmsh::model::occ::synchronize();
+  const CrackEmbedding embedding = embed_cut_in_volume(box, cut, to_m, extend);
+  gmsh::option::setNumber("General.NumThreads", 1);
+  gmsh::option::setNumber("Mesh.MeshSizeMax", size / to_m);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", size / to_m / 4);
+  gmsh::option::setNumber("Mesh.Algorithm3D", 1);
+  gmsh::option::setNumber("Mesh.ElementOrder", 1);
+  gmsh::model::mesh::generate(3);
+  split_crack_nodes(embedding);
+
+  // Linear tets in metres (same extraction as core/geometry.cpp).
+  std::vector<std::size_t> elem_tags, node_tags, all_tags;
+  std::vector<double> coords, param;
+  gmsh::model::mesh::getElementsByType(4, elem_tags, node_tags);
+  gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
+  std::unordered_map<std::size_t, std::size_t> tag_to_coord;
+  for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
+  std::unordered_map<std::size_t, int> index;
+  std::vector<Eigen::Vector3d> points;
+  TetMesh mesh;
+  mesh.tets.resize(static_cast<Eigen::Index>(node_tags.size() / 4), 4);
+  for (std::size_t k = 0; k < node_tags.size(); ++k) {
+    auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(points.size()));
+    if (inserted) {
+      const std::size_t c = tag_to_coord.at(node_tags[k]);
+      points.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
+    }
+    mesh.tets(static_cast<Eigen::Index>(k / 4), static_cast<Eigen::Index>(k % 4)) = it->second;
+  }
+  mesh.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) mesh.vertices.row(static_cast<Eigen::Index>(i)) = points[i];
+
+  // Positive tets; boundary = faces used once (the two sides of the cut now have distinct nodes).
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    if (tet_volume(mesh.vertices.row(mesh.tets(t, 0)), mesh.vertices.row(mesh.tets(t, 1)),
+                   mesh.vertices.row(mesh.tets(t, 2)), mesh.vertices.row(mesh.tets(t, 3))) < 0)
+      std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
+  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+  std::map<std::array<int, 3>, std::pair<std::array<int, 3>, int>> faces;
+  for (int t = 0; t < mesh.num_tets(); ++t)
+    for (const auto& f : kFace) {
+      std::array<int, 3> oriented{mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2])};
+      std::array<int, 3> key = oriented;
+      std::sort(key.begin(), key.end());
+      auto [it, inserted] = faces.emplace(key, std::make_pair(oriented, 1));
+      if (!inserted) ++it->second.second;
+    }
+  std::vector<std::array<int, 3>> boundary;
+  for (const auto& [key, value] : faces)
+    if (value.second == 1) boundary.push_back(value.first);
+  mesh.boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
+  for (std::size_t f = 0; f < boundary.size(); ++f)
+    for (int k = 0; k < 3; ++k) mesh.boundary_faces(static_cast<Eigen::Index>(f), k) = boundary[f][k];
+  mesh.face_tags.assign(boundary.size(), FaceTag::free_surface);
+  mesh.vertex_fixed.assign(mesh.num_vertices(), 0);
+  tag_crack_faces(cut, extend, &mesh);
+  return mesh;
+}
+
+}  // namespace core

@@ -1,0 +1,38 @@
+#pragma once
+// The FEM crack (paper §4, DESIGN.md §2 "FEM crack"): embed the incision's ruled surface in the Gmsh
+// OpenCASCADE volume so the tetrahedra conform to it, then duplicate its nodes with Gmsh's Crack plugin.
+// deal.II then sees two free faces (FaceTag::crack) where the tissue is cut. Only the FEM mesh is
+// cracked; the meshless node cloud stays whole (the EFG model handles the cut by enrichment, eqs. 29–32).
+#include <Eigen/Core>
+
+#include "core/case.hpp"
+#include "core/ruled_surface.hpp"
+#include "core/tet_mesh.hpp"
+
+namespace core {
+
+/// Physical groups that split_crack_nodes() hands to the Crack plugin.
+struct CrackEmbedding {
+  int crack_group = 0;          ///< dim 2: the cut surface inside the body
+  int open_boundary_group = 0;  ///< dim 1: the cut's curves on the body surface (their nodes are split
+                                ///< too, so the cut opens to the outside); the crack front stays shared
+  int num_surfaces = 0;
+};
+
+/// Fragment OCC volume `volume_tag` of the current model with the cut (model units = metres / to_m),
+/// extended `extend` [m] above its surface line so it pierces the surface cleanly; the parts outside the
+/// body are deleted. Throws std::runtime_error when the cut does not end up inside the volume.
+CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, double to_m, double extend);
+
+/// Run after the volume mesh is generated: duplicate the nodes on the cut (Gmsh Crack plugin).
+void split_crack_nodes(const CrackEmbedding& embedding);
+
+/// Tag the boundary faces lying on the cut plane panels as FaceTag::crack. Returns how many.
+int tag_crack_faces(const RuledSurface& cut, double extend, TetMesh* mesh);
+
+/// A cracked box [lo, hi] (metres) meshed at `size` [m]: boundary faces computed, crack faces tagged,
+/// every other face free_surface (the caller tags fixed/load faces). For tests of the crack pipeline.
+TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const RuledSurface& cut,
+                           double size);
+
+}  // namespace core

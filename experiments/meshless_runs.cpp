@@ -1,0 +1,198 @@
+#include "experiments/meshless_runs.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <fstream>
+#include <iostream>
+
+#include "core/output_directory.hpp"
+#include "experiments/progress.hpp"
+#include "experiments/vtu_writer.hpp"
+#include "meshless/efg_model.hpp"
+#include "meshless/verification_problems.hpp"
+
+namespace experiments {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+Eigen::MatrixXd vector_field(const core::PointMatrix& m) { return Eigen::MatrixXd(m); }
+
+}  // namespace
+
+ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
+                           const std::function<void(const std::string&)>& on_step,
+                           const meshless::EfgOptions& options) {
+  const auto t_start = std::chrono::steady_clock::now();
+  meshless::EfgModel model(meshless::problem_from_case(c, g), options);
+  model.setup_system();
+  const meshless::EfgStatistics& st = model.statistics();
+  if (on_step)
+    on_step(fmt::format("EFG set up: {} nodes, {} cells, {} volume points ({:.1f} nodes each), alpha = {:.4g} Pa/m, "
+                        "{} non-zeros, {}",
+                        st.num_nodes, st.num_cells, st.num_volume_points, st.mean_nodes_per_point, st.alpha,
+                        st.matrix_nonzeros, st.linear_solver));
+  ModelResult r;
+  r.model = "meshless";
+  const int n_steps = static_cast<int>(model.problem().step_times.size());
+  const int every = std::max(1, c.output.every);
+  for (int step = 1; step <= n_steps; ++step) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const meshless::StepRecord rec = model.solve_step(step);
+    if (!vtu_prefix.empty() && c.output.vtu && (step % every == 0 || step == n_steps)) {
+      // output_results: interpolated displacement u(X_i) = sum_j phi_j(X_i) U_j on the meshless cells (eq. 7)
+      write_tet_vtu(fmt::format("{}_{:03d}.vtu", vtu_prefix, step), model.nodes(), g.meshless_mesh.tets,
+                    {{"displacement", vector_field(model.nodal_displacements())}}, {});
+    }
+    r.steps.push_back({rec.step, rec.time, seconds_since(t0), rec.assembly_seconds, rec.solve_seconds,
+                       rec.newton_iterations, rec.residuals});
+    if (on_step)
+      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}{}", step, n_steps, rec.time,
+                          rec.newton_iterations, rec.residuals.back(),
+                          rec.reused_factorisation ? " (factorisation reused)" : ""));
+  }
+  r.sample_points = g.sample_points;
+  r.sample_displacements = model.displacements_at(g.sample_points);
+  if (!r.sample_displacements.allFinite()) throw std::runtime_error("meshless: non-finite sample displacement");
+  const meshless::EfgTimings& t = model.timings();
+  r.setup_seconds = t.setup_seconds + t.shape_function_seconds;
+  r.total_seconds = seconds_since(t_start);
+  r.details["n_nodes"] = st.num_nodes;
+  r.details["n_dofs"] = 3 * st.num_nodes;
+  r.details["n_cells"] = st.num_cells;
+  r.details["n_volume_points"] = st.num_volume_points;
+  r.details["n_boundary_points"] = st.num_boundary_points;
+  r.details["mean_nodes_per_point"] = st.mean_nodes_per_point;
+  r.details["matrix_nonzeros"] = st.matrix_nonzeros;
+  r.details["alpha_Pa_per_m"] = st.alpha;
+  r.details["penalised_area_mm2"] = st.penalised_area * 1e6;
+  r.details["load_area_mm2"] = st.loaded_area * 1e6;
+  r.details["quadrature_order"] = c.meshless.quadrature_order;
+  r.details["variationally_consistent_integration"] = options.variationally_consistent;
+  r.details["divergence_defect_before_vci"] = model.divergence_defect();
+  r.details["linear_solver"] = st.linear_solver;
+  r.details["nonlinear_solver"] = "full Newton, consistent tangent (core::KelvinLaw)";
+  r.details["setup_seconds"] = t.setup_seconds;
+  r.details["shape_function_seconds"] = t.shape_function_seconds;
+  r.details["assembly_seconds"] = t.assembly_seconds;
+  r.details["solve_seconds"] = t.solve_seconds;
+  return r;
+}
+
+int run_solve_meshless(const std::string& config, const std::string& out_dir) {
+  const core::Case c = core::load_case(config);
+  Progress progress("solve meshless", 3 + c.time.steps);
+  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
+  progress.step("building geometry and the node cloud (Gmsh)");
+  core::GeometryOptions options;
+  options.build_fem_mesh = false;
+  const double t0 = progress.elapsed_seconds();
+  const core::Geometry g = core::build_geometry(c, options);
+  const double geometry_seconds = progress.elapsed_seconds() - t0;
+  ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
+                                 [&](const std::string& line) { progress.step(line); });
+  r.details["geometry_seconds"] = geometry_seconds;
+  r.setup_seconds += geometry_seconds;
+  r.total_seconds += geometry_seconds;
+  write_samples_csv(out.file("samples.csv").string(), r);
+  write_timings_json(out.file("timings.json").string(), r);
+  std::ofstream(out.file("case.json")) << c.document.dump(2) << "\n";
+  out.commit();
+  progress.done();
+  double max_u = 0.0;
+  for (Eigen::Index i = 0; i < r.sample_displacements.rows(); ++i)
+    max_u = std::max(max_u, r.sample_displacements.row(i).norm());
+  std::cout << fmt::format("meshless: {} steps, max sample displacement {:.4f} mm, {:.1f} s\nwrote {}\n",
+                           r.steps.size(), max_u * 1e3, r.total_seconds, out.destination().string());
+  return 0;
+}
+
+int run_verify_meshless(const std::string& out_dir, bool quick) {
+  using nlohmann::json;
+  const std::vector<int> orders = quick ? std::vector<int>{2, 3} : std::vector<int>{1, 2, 3, 4, 5};
+  const std::vector<int> heights = quick ? std::vector<int>{2, 3, 4} : std::vector<int>{2, 3, 4, 6};
+  Progress progress("verify meshless", 3 + 2 * static_cast<int>(orders.size()) + static_cast<int>(heights.size()));
+  core::OutputDirectory out(out_dir);
+  json j;
+  std::string md = "# Meshless (EFG) verification\n\nProduced by `tissue verify meshless`; see docs/MESHLESS.md.\n\n";
+
+  progress.step("MLS invariants at random points");
+  const meshless::InvariantReport inv = meshless::mls_invariants();
+  j["invariants"] = {{"nodes", inv.num_nodes},
+                     {"points", inv.num_points},
+                     {"max_partition_of_unity_error", inv.max_partition_error},
+                     {"max_linear_reproduction_error_over_h", inv.max_reproduction_error},
+                     {"max_gradient_sum_times_h", inv.max_gradient_sum},
+                     {"max_gradient_reproduction_error", inv.max_gradient_reproduction}};
+  md += fmt::format(
+      "## MLS invariants ({} random points, jittered {}-node cloud)\n\n| invariant | max error |\n|---|---|\n"
+      "| Σφᵢ = 1 | {:.2e} |\n| Σφᵢxᵢ = x (÷h) | {:.2e} |\n| Σ∇φᵢ = 0 (×h) | {:.2e} |\n| Σxᵢ⊗∇φᵢ = I | {:.2e} |\n\n",
+      inv.num_points, inv.num_nodes, inv.max_partition_error, inv.max_reproduction_error, inv.max_gradient_sum,
+      inv.max_gradient_reproduction);
+
+  md += "## Linear patch test (jittered 6³-node cube, penalty ū and σn on all faces)\n\n"
+        "| quadrature order | max rel. error, plain eq. 22 | max rel. error, with VCI |\n|---|---|---|\n";
+  json patch = json::array();
+  for (int order : orders) {
+    progress.step(fmt::format("patch test, quadrature order {} (plain)", order));
+    const meshless::PatchTestReport plain = meshless::run_patch_test(order, false);
+    progress.step(fmt::format("patch test, quadrature order {} (VCI)", order));
+    const meshless::PatchTestReport vci = meshless::run_patch_test(order, true);
+    patch.push_back({{"quadrature_order", order},
+                     {"nodes", plain.num_nodes},
+                     {"max_relative_error_plain", plain.max_relative_error},
+                     {"max_relative_error_vci", vci.max_relative_error},
+                     {"strain_relative_error_plain", plain.strain_relative_error},
+                     {"strain_relative_error_vci", vci.strain_relative_error}});
+    md += fmt::format("| {} | {:.3e} | {:.3e} |\n", order, plain.max_relative_error, vci.max_relative_error);
+  }
+  j["patch_test"] = patch;
+
+  md += "\n## Cantilever vs Timoshenko (L = 100 mm, 20 × 20 mm, ν = 0, quadrature order 3, VCI)\n\n"
+        "| h [mm] | nodes | L2 rel. error | energy rel. error | tip u_y / exact |\n|---|---|---|---|---|\n";
+  json cant = json::array();
+  std::vector<double> h, l2, en;
+  for (int nd : heights) {
+    progress.step(fmt::format("cantilever, {} cells through the height", nd));
+    const meshless::CantileverReport r = meshless::run_cantilever(nd);
+    h.push_back(r.node_spacing);
+    l2.push_back(r.l2_error);
+    en.push_back(r.energy_error);
+    cant.push_back({{"h_mm", r.node_spacing * 1e3},
+                    {"nodes", r.num_nodes},
+                    {"l2_error", r.l2_error},
+                    {"energy_error", r.energy_error},
+                    {"tip_deflection_mm", r.tip_deflection * 1e3},
+                    {"exact_tip_deflection_mm", r.exact_tip_deflection * 1e3},
+                    {"seconds", r.seconds}});
+    md += fmt::format("| {:.3f} | {} | {:.3e} | {:.3e} | {:.5f} |\n", r.node_spacing * 1e3, r.num_nodes, r.l2_error,
+                      r.energy_error, r.tip_deflection / r.exact_tip_deflection);
+  }
+  const double rate_l2 = meshless::convergence_rate(h, l2), rate_en = meshless::convergence_rate(h, en);
+  j["cantilever"] = {{"runs", cant}, {"rate_l2", rate_l2}, {"rate_energy", rate_en}};
+  md += fmt::format("\nFitted rates: L2 {:.2f}, energy {:.2f} (required ≥ 0.9).\n\n", rate_l2, rate_en);
+
+  progress.step("creep bar under a step load");
+  const meshless::CreepReport cr = meshless::run_creep_bar(40);
+  j["creep"] = {{"nodes", cr.num_nodes},        {"times", cr.times}, {"strain", cr.strain},
+                {"exact", cr.exact},            {"max_relative_error", cr.max_relative_error}};
+  md += fmt::format(
+      "## Creep bar (40 × 10 × 10 mm, ν = 0, σ0 = 100 Pa step at t = 0, 40 steps of 0.1 s)\n\n"
+      "Max relative error of u_x(L)/L against σ0/K1 + σ0/K2 (1 − e^(−K2 t/η)): **{:.3e}** (required < 1e-2).\n",
+      cr.max_relative_error);
+
+  progress.step("writing meshless.json and meshless.md");
+  std::ofstream(out.file("meshless.json")) << j.dump(2) << "\n";
+  std::ofstream(out.file("meshless.md")) << md;
+  out.commit();
+  progress.done();
+  std::cout << md;
+  const bool ok = rate_l2 >= 0.9 && rate_en >= 0.9 && cr.max_relative_error < 0.01;
+  return ok ? 0 : 1;
+}
+
+}  // namespace experiments

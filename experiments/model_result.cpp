@@ -1,0 +1,58 @@
+#include "experiments/model_result.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <stdexcept>
+
+namespace experiments {
+
+void write_samples_csv(const std::string& path, const ModelResult& r) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << "sample,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm\n";
+  for (Eigen::Index i = 0; i < r.sample_points.rows(); ++i) {
+    const Eigen::Vector3d x = r.sample_points.row(i).transpose() * 1e3;
+    const Eigen::Vector3d u = r.sample_displacements.row(i).transpose() * 1e3;
+    // eq. 33: the displacement of a sample is the distance between its deformed and original positions.
+    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", i, x(0), x(1), x(2), u(0), u(1), u(2),
+                       u.norm());
+  }
+}
+
+nlohmann::json timings_json(const ModelResult& r) {
+  nlohmann::json j;
+  j["model"] = r.model;
+  j["setup_seconds"] = r.setup_seconds;
+  j["total_seconds"] = r.total_seconds;
+  double assembly = 0.0, solve = 0.0;
+  int iterations = 0;
+  nlohmann::json steps = nlohmann::json::array();
+  for (const auto& s : r.steps) {
+    assembly += s.assembly_seconds;
+    solve += s.solve_seconds;
+    iterations += s.iterations;
+    steps.push_back({{"step", s.step},
+                     {"time", s.time},
+                     {"wall_seconds", s.wall_seconds},
+                     {"assembly_seconds", s.assembly_seconds},
+                     {"solve_seconds", s.solve_seconds},
+                     {"newton_iterations", s.iterations},
+                     {"linear_iterations", s.linear_iterations},
+                     {"relative_residuals", s.residuals}});
+  }
+  j["assembly_seconds"] = assembly;
+  j["solve_seconds"] = solve;
+  j["newton_iterations_total"] = iterations;
+  j["steps"] = steps;
+  j["details"] = r.details;
+  return j;
+}
+
+void write_timings_json(const std::string& path, const ModelResult& r) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error("cannot write " + path);
+  out << timings_json(r).dump(2) << "\n";
+}
+
+}  // namespace experiments

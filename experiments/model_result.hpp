@@ -1,0 +1,39 @@
+#pragma once
+// A model-neutral result of one solve (FEM reference or meshless model), and the writers that put it in
+// a results folder: samples.csv (eq. 33 displacements) and timings.json. The comparator reads these
+// files and never looks inside a model.
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace experiments {
+
+struct StepTiming {
+  int step = 0;
+  double time = 0.0;             ///< t_{n+1} [s]
+  double wall_seconds = 0.0;
+  double assembly_seconds = 0.0;
+  double solve_seconds = 0.0;
+  int iterations = 0;            ///< Newton iterations (linear solves)
+  std::vector<double> residuals; ///< relative residual history
+  int linear_iterations = 0;     ///< iterations of the linear solver over the step (0 for direct)
+};
+
+struct ModelResult {
+  std::string model;                    ///< "fem" or "meshless"
+  Eigen::MatrixXd sample_points;        ///< #samples by 3, reference coordinates [m]
+  Eigen::MatrixXd sample_displacements; ///< #samples by 3 at the last step [m]
+  double setup_seconds = 0.0;
+  double total_seconds = 0.0;
+  std::vector<StepTiming> steps;
+  nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
+};
+
+/// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|).
+void write_samples_csv(const std::string& path, const ModelResult& result);
+/// timings.json: setup, totals and per-step timings with Newton iterations and residuals.
+nlohmann::json timings_json(const ModelResult& result);
+void write_timings_json(const std::string& path, const ModelResult& result);
+
+}  // namespace experiments

@@ -1,0 +1,113 @@
+#include "experiments/solve_commands.hpp"
+
+#include <fmt/format.h>
+
+#include <fstream>
+#include <iostream>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "core/output_directory.hpp"
+#include "experiments/meshless_runs.hpp"
+#include "experiments/model_result.hpp"
+#include "experiments/progress.hpp"
+#include "reference_fem/fem_model.hpp"
+
+namespace experiments {
+namespace {
+
+/// Every solver writes the same files: samples.csv, timings.json and the config as run.
+void write_model_files(const core::OutputDirectory& out, const core::Case& c, const ModelResult& r) {
+  write_samples_csv(out.file("samples.csv").string(), r);
+  write_timings_json(out.file("timings.json").string(), r);
+  std::ofstream(out.file("case.json")) << c.document.dump(2) << "\n";
+}
+
+void print_summary(const ModelResult& r) {
+  double max_u = 0.0;
+  for (Eigen::Index i = 0; i < r.sample_displacements.rows(); ++i)
+    max_u = std::max(max_u, r.sample_displacements.row(i).norm());
+  int iterations = 0;
+  for (const auto& s : r.steps) iterations += s.iterations;
+  std::cout << fmt::format("{}: {} steps, {} Newton iterations, max sample displacement {:.4f} mm, {:.1f} s\n",
+                           r.model, r.steps.size(), iterations, max_u * 1e3, r.total_seconds);
+}
+
+ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
+  ModelResult r;
+  r.model = "fem";
+  r.sample_points = g.sample_points;
+  r.sample_displacements = f.sample_displacements;
+  r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
+  r.total_seconds = setup + f.total_seconds;
+  int factorizations = 0;
+  for (const auto& s : f.steps) {
+    r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
+                       s.residuals, s.linear_iterations});
+    factorizations += s.factorizations;
+  }
+  r.details["lu_factorizations"] = factorizations;
+  r.details["linear_solver"] = "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)";
+  r.details["n_dofs"] = f.n_dofs;
+  r.details["n_cells"] = f.n_cells;
+  r.details["load_area_mm2"] = f.load_area * 1e6;
+  r.details["crack_faces"] = f.crack_faces;
+  r.details["geometry_seconds"] = setup;
+  r.details["timer_sections_seconds"] = f.sections;
+  std::vector<double> offsets_mm;
+  for (double o : f.sample_offsets) offsets_mm.push_back(o * 1e3);
+  r.details["sample_offsets_mm"] = offsets_mm;
+  return r;
+}
+
+int run_solve_fem(const std::string& config, const std::string& out_dir) {
+  const core::Case c = core::load_case(config);
+  Progress progress("solve fem", 2 + c.time.steps);
+  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
+  progress.step("building geometry and the FEM mesh (Gmsh)");
+  core::GeometryOptions options;
+  options.build_node_cloud = false;
+  const double t0 = progress.elapsed_seconds();
+  const core::Geometry g = core::build_geometry(c, options);
+  const double geometry_seconds = progress.elapsed_seconds() - t0;
+  progress.step(fmt::format("deal.II setup and time stepping ({} tets, degree {})", g.fem_mesh.num_tets(),
+                            c.fem.degree));
+  reference_fem::FemRunOptions run;
+  if (c.output.vtu) run.vtu_prefix = out.file("displacement").string();
+  run.on_step = [&](const reference_fem::StepReport& s) {
+    progress.step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} GMRES, {} LU), residual {:.2e}",
+                              s.step, c.time.steps, s.time, s.newton_iterations, s.linear_iterations,
+                              s.factorizations, s.residuals.back()));
+  };
+  const reference_fem::FemRunResult f = reference_fem::run_case(c, g, run);
+  const ModelResult r = to_model_result(g, f, geometry_seconds);
+  write_model_files(out, c, r);
+  out.commit();
+  progress.done();
+  print_summary(r);
+  std::cout << fmt::format("wrote {}\n", out.destination().string());
+  return 0;
+}
+
+}  // namespace
+
+void add_solve_commands(CLI::App& app) {
+  auto* group = app.add_subcommand("solve", "Solve a load case with one model and write its results folder");
+  group->require_subcommand(1);
+
+  auto* fem = group->add_subcommand(
+      "fem", "deal.II FEM reference: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json");
+  static std::string fem_config, fem_out;
+  fem->add_option("CONFIG", fem_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
+  fem->add_option("--out", fem_out, "Output folder (written atomically)")->required();
+  fem->callback([] { throw CommandResult{run_solve_fem(fem_config, fem_out)}; });
+
+  auto* efg = group->add_subcommand(
+      "meshless", "EFG meshless model: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json");
+  static std::string efg_config, efg_out;
+  efg->add_option("CONFIG", efg_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
+  efg->add_option("--out", efg_out, "Output folder (written atomically)")->required();
+  efg->callback([] { throw CommandResult{run_solve_meshless(efg_config, efg_out)}; });
+}
+
+}  // namespace experiments

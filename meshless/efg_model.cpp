@@ -1,0 +1,403 @@
+#include "meshless/efg_model.hpp"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <Eigen/IterativeLinearSolvers>
+#include <limits>
+#include <Eigen/SparseLU>
+#include <Eigen/UmfPackSupport>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <stdexcept>
+
+#include "meshless/mls_shape_functions.hpp"
+#include "meshless/node_search.hpp"
+#include "meshless/support_radii.hpp"
+
+namespace meshless {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// B^T of eq. 22 for one node (3 by 6), gradient g = (phi_x, phi_y, phi_z).
+inline Eigen::Matrix<double, 3, 6> b_transpose(const Eigen::Vector3d& g) {
+  Eigen::Matrix<double, 3, 6> bt;
+  bt << g.x(), 0.0, 0.0, g.y(), 0.0, g.z(),  //
+      0.0, g.y(), 0.0, g.x(), g.z(), 0.0,     //
+      0.0, 0.0, g.z(), 0.0, g.y(), g.x();
+  return bt;
+}
+
+/// Runs body(i) for i in [0, n) in parallel; rethrows the first exception (by index) after the loop, because an
+/// exception must not leave an OpenMP region.
+template <class Body>
+void parallel_for(int n, int chunk, const Body& body) {
+  std::exception_ptr error;
+  int error_index = n;
+#pragma omp parallel for schedule(dynamic, chunk)
+  for (int i = 0; i < n; ++i) {
+    try {
+      body(i);
+    } catch (...) {
+#pragma omp critical(efg_parallel_error)
+      if (i < error_index) {
+        error_index = i;
+        error = std::current_exception();
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
+struct EfgModel::Factorisation {
+  // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
+  // row), where Eigen's SparseLU is an order of magnitude slower.
+  Eigen::UmfPackLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>> lu;
+  static std::string last_error(const Eigen::UmfPackLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>>& lu) {
+    return lu.info() == Eigen::NumericalIssue ? "numerically singular matrix" : "UMFPACK error";
+  }
+  bool analysed = false;
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
+  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
+  bool valid = false;  // holds a factorisation (or preconditioner) of the current matrix_
+};
+
+EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
+    : problem_(std::move(problem)),
+      options_(options),
+      law_(problem_.material),
+      factorisation_(std::make_unique<Factorisation>()) {
+  if (!(problem_.node_spacing > 0.0))
+    throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
+  if (!(problem_.penalty_factor > 0.0))
+    throw std::invalid_argument(fmt::format("EfgModel '{}': penalty_factor must be > 0", problem_.name));
+  if (problem_.step_times.empty())
+    throw std::invalid_argument(fmt::format("EfgModel '{}': no time steps", problem_.name));
+  double previous = 0.0;
+  for (double t : problem_.step_times) {
+    if (!(t >= previous) || !std::isfinite(t))
+      throw std::invalid_argument(fmt::format("EfgModel '{}': step times must be finite and non-decreasing from 0",
+                                              problem_.name));
+    previous = t;
+  }
+  alpha_ = problem_.alpha();  // eq. 23: alpha = penalty_factor * K1 / node_spacing [Pa/m]
+}
+
+EfgModel::~EfgModel() = default;
+
+bool EfgModel::use_direct_solver() const {
+  switch (options_.linear_solver) {
+    case LinearSolverKind::direct: return true;
+    case LinearSolverKind::iterative: return false;
+    case LinearSolverKind::automatic: break;
+  }
+  return 3 * problem_.mesh.num_vertices() <= options_.direct_solver_max_dofs;
+}
+
+void EfgModel::setup_system() {
+  auto t0 = std::chrono::steady_clock::now();
+  const core::TetMesh& mesh = problem_.mesh;
+  const int n = mesh.num_vertices();
+  search_ = std::make_unique<NodeSearch>(mesh.vertices);
+  radii_ = std::make_unique<SupportRadii>(mesh.vertices, *search_, problem_.support);
+  mls_ = std::make_unique<MlsShapeFunctions>(mesh.vertices, *radii_, *search_);
+  core::PointMatrix vp, sp;
+  Eigen::VectorXd vw, sw;
+  std::vector<int> vc, sc;
+  tet_quadrature_points(mesh, problem_.quadrature_order, &vp, &vw, &vc);
+  face_quadrature_points(mesh, problem_.quadrature_order, &sp, &sw, &sc);
+  timings_.setup_seconds = seconds_since(t0);
+
+  // Shape functions and gradients are tabulated once: the cloud does not move (eq. 17 small strain).
+  t0 = std::chrono::steady_clock::now();
+  volume_ = tabulate_shape_functions(*mls_, std::move(vp), std::move(vw), std::move(vc), true);
+  surface_ = tabulate_shape_functions(*mls_, std::move(sp), std::move(sw), std::move(sc), false);
+  timings_.shape_function_seconds = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  volume_incidence_ = NodeIncidence(volume_, n);
+  surface_incidence_ = NodeIncidence(surface_, n);
+  for (int i = 0; i < n; ++i)
+    if (volume_incidence_.offsets[i + 1] == volume_incidence_.offsets[i])
+      throw std::runtime_error(fmt::format(
+          "EfgModel '{}': node {} at ({:.6g}, {:.6g}, {:.6g}) mm covers no integration point (support radius "
+          "{:.6g} mm); refine the background cells or raise support_factor",
+          problem_.name, i, 1e3 * mesh.vertices(i, 0), 1e3 * mesh.vertices(i, 1), 1e3 * mesh.vertices(i, 2),
+          1e3 * radii_->radius(i)));
+  sparsity_ = std::make_unique<NodalSparsity>(n, std::vector<const ShapeTable*>{&volume_, &surface_},
+                                              std::vector<const NodeIncidence*>{&volume_incidence_, &surface_incidence_});
+  matrix_ = sparsity_->make_matrix();
+  boundary_ = make_boundary_terms(problem_, surface_, alpha_);
+
+  // Linear variationally consistent integration: xi_i = (oint phi_i n - int grad phi_i) / int_{supp i} 1, both
+  // integrals by the same quadrature the assembly uses, so that the corrected test gradients satisfy the
+  // discrete divergence theorem exactly (linear patch test to round-off, eq. 21 with eq. 24's traction term).
+  const Eigen::Matrix<double, Eigen::Dynamic, 3> normals = boundary_face_normals(mesh);
+  Eigen::Matrix3Xd defect = Eigen::Matrix3Xd::Zero(3, n);
+  Eigen::VectorXd support_volume = Eigen::VectorXd::Zero(n);
+  for (int q = 0; q < volume_.size(); ++q)
+    for (int s = volume_.begin(q); s < volume_.end(q); ++s) {
+      defect.col(volume_.nodes[s]) -= volume_.weights[q] * volume_.dphi.col(s);
+      support_volume[volume_.nodes[s]] += volume_.weights[q];
+    }
+  for (int q = 0; q < surface_.size(); ++q) {
+    const Eigen::Vector3d nq = normals.row(surface_.cells[q]).transpose();
+    for (int s = surface_.begin(q); s < surface_.end(q); ++s)
+      defect.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * nq;
+  }
+  divergence_defect_ = defect.colwise().norm().maxCoeff();
+  vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
+  if (options_.variationally_consistent)
+    for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect.col(i) / support_volume[i];
+
+  const int nq = volume_.size();
+  states_.assign(nq, core::KelvinState{});
+  strain_.assign(nq, core::Vector6::Zero());
+  stress_.assign(nq, core::Vector6::Zero());
+  tangent_.assign(nq, core::Matrix6::Zero());
+  u_ = Eigen::VectorXd::Zero(3 * n);
+  residual_ = Eigen::VectorXd::Zero(3 * n);
+  external_ = Eigen::VectorXd::Zero(3 * n);
+  timings_.setup_seconds += seconds_since(t0);
+
+  stats_.num_nodes = n;
+  stats_.num_cells = mesh.num_tets();
+  stats_.num_volume_points = volume_.size();
+  stats_.num_boundary_points = surface_.size();
+  stats_.mean_nodes_per_point = nq > 0 ? static_cast<double>(volume_.nodes.size()) / nq : 0.0;
+  stats_.matrix_nonzeros = 9 * sparsity_->num_block_entries();
+  stats_.alpha = alpha_;
+  stats_.penalised_area = boundary_.penalised_area;
+  stats_.loaded_area = boundary_.loaded_area;
+  const char* direct = "UMFPACK (Eigen::UmfPackLU)";
+  stats_.linear_solver = use_direct_solver() ? direct : "BiCGSTAB (Jacobi preconditioner)";
+  set_up_ = true;
+}
+
+void EfgModel::update_material(double dt) {
+  // eq. 17: strain from the current parameters; eq. 13 through the shared law (one state per point).
+  const ShapeTable& t = volume_;
+  parallel_for(t.size(), 512, [&](int q) {
+    core::Vector6 e = core::Vector6::Zero();
+    for (int s = t.begin(q); s < t.end(q); ++s) {
+      const Eigen::Vector3d g = t.dphi.col(s);
+      const Eigen::Vector3d u = u_.segment<3>(3 * t.nodes[s]);
+      e[0] += g.x() * u.x();
+      e[1] += g.y() * u.y();
+      e[2] += g.z() * u.z();
+      e[3] += g.y() * u.x() + g.x() * u.y();
+      e[4] += g.z() * u.y() + g.y() * u.z();
+      e[5] += g.z() * u.x() + g.x() * u.z();
+    }
+    strain_[q] = e;
+    const core::KelvinResponse r = law_.update(states_[q], e, dt);
+    stress_[q] = r.stress;
+    tangent_[q] = r.tangent;
+  });
+}
+
+void EfgModel::assemble_system(bool with_matrix) {
+  if (!set_up_) throw std::logic_error("EfgModel::assemble_system before setup_system");
+  update_material(current_dt_);
+
+  // u-bar mismatch of the penalty term needs u(X_q) = sum phi_j U_j at the penalised boundary points.
+  const ShapeTable& sv = surface_;
+  std::vector<Eigen::Vector3d> u_surface(sv.size(), Eigen::Vector3d::Zero());
+  for (int q = 0; q < sv.size(); ++q) {
+    if (boundary_.penalty_weight[q] == 0.0) continue;
+    for (int s = sv.begin(q); s < sv.end(q); ++s) u_surface[q] += sv.phi[s] * u_.segment<3>(3 * sv.nodes[s]);
+  }
+
+  const int n = problem_.mesh.num_vertices();
+  double* values = matrix_.valuePtr();
+  const NodalSparsity& sp = *sparsity_;
+  const ShapeTable& vt = volume_;
+  // Row by row (the equations of node i): each thread owns whole rows, so no locks or atomics are needed.
+  parallel_for(n, 16, [&](int i) {
+    thread_local std::vector<int> position;
+    if (static_cast<int>(position.size()) != n) position.assign(n, -1);
+    for (int k = sp.row_begin(i); k < sp.row_end(i); ++k) position[sp.column(k)] = k - sp.row_begin(i);
+    const int len = sp.row_length(i);
+    double* row[3] = {values + sp.value_index(i, 0, 0, 0), values + sp.value_index(i, 1, 0, 0),
+                      values + sp.value_index(i, 2, 0, 0)};
+    if (with_matrix)
+      for (int a = 0; a < 3; ++a) std::fill(row[a], row[a] + 3 * len, 0.0);
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+
+    // eq. 21 and the internal-force terms of eq. 24: int B_i^T sigma, int B_i^T E_k B_j.
+    for (int e = volume_incidence_.offsets[i]; e < volume_incidence_.offsets[i + 1]; ++e) {
+      const int q = volume_incidence_.points[e];
+      const double w = vt.weights[q];
+      const Eigen::Vector3d g = vt.dphi.col(volume_incidence_.slots[e]) + vci_correction_.col(i);
+      const Eigen::Matrix<double, 3, 6> bt = b_transpose(g);
+      f.noalias() += w * (bt * stress_[q]);
+      if (!with_matrix) continue;
+      const Eigen::Matrix<double, 3, 6> gd = w * (bt * tangent_[q]);
+      for (int s = vt.begin(q); s < vt.end(q); ++s) {
+        const int k = position[vt.nodes[s]];
+        const double hx = vt.dphi(0, s), hy = vt.dphi(1, s), hz = vt.dphi(2, s);
+        // (B_i^T E_k) B_j with the zero pattern of B_j (eq. 22) spelt out: 27 multiplications.
+        for (int a = 0; a < 3; ++a) {
+          double* v = row[a] + 3 * k;
+          v[0] += gd(a, 0) * hx + gd(a, 3) * hy + gd(a, 5) * hz;
+          v[1] += gd(a, 1) * hy + gd(a, 3) * hx + gd(a, 4) * hz;
+          v[2] += gd(a, 2) * hz + gd(a, 4) * hy + gd(a, 5) * hx;
+        }
+      }
+    }
+    // eq. 23: K^alpha_ij = int alpha phi_i phi_j I3, and its residual alpha int phi_i u(X) (u-bar part is external).
+    for (int e = surface_incidence_.offsets[i]; e < surface_incidence_.offsets[i + 1]; ++e) {
+      const int q = surface_incidence_.points[e];
+      const double c = boundary_.penalty_weight[q];
+      if (c == 0.0) continue;
+      const double ci = c * sv.phi[surface_incidence_.slots[e]];
+      f += ci * u_surface[q];
+      if (!with_matrix) continue;
+      for (int s = sv.begin(q); s < sv.end(q); ++s) {
+        const int k = position[sv.nodes[s]];
+        const double v = ci * sv.phi[s];
+        for (int a = 0; a < 3; ++a) row[a][3 * k + a] += v;
+      }
+    }
+    residual_.segment<3>(3 * i) = f - external_.segment<3>(3 * i);
+    for (int k = sp.row_begin(i); k < sp.row_end(i); ++k) position[sp.column(k)] = -1;
+  });
+  if (!residual_.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel '{}': the residual is not finite", problem_.name));
+  if (with_matrix) {
+    matrix_current_ = true;
+    factorisation_->valid = false;
+  }
+}
+
+void EfgModel::solve() {
+  if (!matrix_current_ && !factorisation_->valid)
+    throw std::logic_error("EfgModel::solve without an assembled matrix");
+  Eigen::VectorXd du;
+  Factorisation& f = *factorisation_;
+  if (use_direct_solver()) {
+    if (!f.valid) {
+      f.colmajor = matrix_;
+      const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& a = f.colmajor;
+      if (!f.analysed) {
+        f.lu.analyzePattern(a);  // the pattern never changes: order the columns once
+        f.analysed = true;
+      }
+      f.lu.factorize(a);
+      if (f.lu.info() != Eigen::Success)
+        throw std::runtime_error(fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", problem_.name,
+                                             Factorisation::last_error(f.lu)));
+      f.valid = true;
+    }
+    const Eigen::VectorXd rhs = -residual_;
+    du = f.lu.solve(rhs);
+  } else {
+    if (!f.valid) {
+      f.bicgstab.setTolerance(options_.iterative_tolerance);
+      f.bicgstab.setMaxIterations(options_.iterative_max_iterations);
+      f.bicgstab.compute(matrix_);
+      f.valid = true;
+    }
+    du = f.bicgstab.solve(-residual_);
+    if (f.bicgstab.info() != Eigen::Success)
+      throw std::runtime_error(fmt::format("EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g})",
+                                           problem_.name, f.bicgstab.iterations(), f.bicgstab.error()));
+  }
+  if (!du.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel '{}': the linear solve produced a non-finite update",
+                                         problem_.name));
+  u_ += du;  // eq. 14
+  factorised_dt_ = current_dt_;
+}
+
+StepRecord EfgModel::solve_step(int step) {
+  if (!set_up_) throw std::logic_error("EfgModel::solve_step before setup_system");
+  const std::vector<double>& times = problem_.step_times;
+  if (step < 1 || step > static_cast<int>(times.size())) throw std::out_of_range("EfgModel::solve_step: bad step");
+  StepRecord rec;
+  rec.step = step;
+  rec.time = times[step - 1];
+  rec.dt = rec.time - (step >= 2 ? times[step - 2] : 0.0);
+  rec.load_scale = problem_.load_scale(rec.time);
+  current_dt_ = rec.dt;
+  external_ = boundary_.penalty_load + rec.load_scale * boundary_.traction_load;
+  double reference = external_.norm();
+
+  // Newton with tangent reuse. A factorisation costs seconds (dense EFG rows), a back-substitution a
+  // fraction of that, so the last factorised consistent tangent is kept while it still contracts the
+  // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
+  // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
+  const bool constant_tangent = problem_.material.k == 0.0;
+  bool refresh = !factorisation_->valid || factorised_dt_ != current_dt_;
+  double previous = std::numeric_limits<double>::infinity();
+  for (int it = 0;; ++it) {
+    const bool reuse = !refresh && factorisation_->valid && factorised_dt_ == current_dt_;
+    auto t0 = std::chrono::steady_clock::now();
+    assemble_system(!reuse);
+    if (reuse) rec.reused_factorisation = true;
+    rec.assembly_seconds += seconds_since(t0);
+    const double r = residual_.norm();
+    if (!(reference > 0.0)) reference = r > 0.0 ? r : 1.0;
+    rec.residuals.push_back(r / reference);
+    if (!std::isfinite(r))
+      throw std::runtime_error(fmt::format("EfgModel '{}': step {} iteration {}: non-finite residual", problem_.name,
+                                           step, it));
+    refresh = !constant_tangent && reuse && r > options_.refactor_contraction * previous;
+    previous = r;
+    if (r <= options_.newton_tolerance * reference) break;
+    if (it >= options_.max_newton_iterations)
+      throw std::runtime_error(fmt::format(
+          "EfgModel '{}': Newton did not converge in step {} (t = {:g} s) after {} iterations: ||R||/||F|| = {:.3e}",
+          problem_.name, step, rec.time, it, r / reference));
+    t0 = std::chrono::steady_clock::now();
+    solve();
+    rec.solve_seconds += seconds_since(t0);
+    ++rec.newton_iterations;
+  }
+  // Commit the history (eqs. 15-16) at the converged strain of every point.
+  parallel_for(volume_.size(), 1024, [&](int q) { law_.update(states_[q], strain_[q], current_dt_, &states_[q]); });
+  timings_.assembly_seconds += rec.assembly_seconds;
+  timings_.solve_seconds += rec.solve_seconds;
+  records_.push_back(rec);
+  return rec;
+}
+
+void EfgModel::run(const StepObserver& observer) {
+  setup_system();
+  const int n = static_cast<int>(problem_.step_times.size());
+  for (int step = 1; step <= n; ++step) {
+    const StepRecord rec = solve_step(step);
+    const int every = std::max(1, problem_.output_every);
+    if (observer && (step % every == 0 || step == n)) observer(*this, rec);  // output_results
+  }
+}
+
+Eigen::Vector3d EfgModel::displacement_at(const Eigen::Vector3d& x) const {
+  const MlsEvaluation e = mls_->evaluate(x, false);
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  for (int k = 0; k < e.size(); ++k) u += e.phi[k] * u_.segment<3>(3 * e.nodes[k]);  // eq. 7
+  if (!u.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel: non-finite displacement at ({:.6g}, {:.6g}, {:.6g}) mm",
+                                         1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z()));
+  return u;
+}
+
+core::PointMatrix EfgModel::displacements_at(const core::PointMatrix& points) const {
+  if (!set_up_) throw std::logic_error("EfgModel::displacements_at before setup_system");
+  core::PointMatrix u(points.rows(), 3);
+  parallel_for(static_cast<int>(points.rows()), 256,
+               [&](int p) { u.row(p) = displacement_at(points.row(p).transpose()).transpose(); });
+  return u;
+}
+
+std::vector<core::Vector6> EfgModel::quadrature_strains() const { return strain_; }
+
+}  // namespace meshless

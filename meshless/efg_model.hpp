@@ -1,0 +1,145 @@
+#pragma once
+// The element-free Galerkin soft-tissue model of Zhang et al. 2020 §2: MLS shape functions (eqs. 1-8), the
+// nonlinear Kelvin law (eqs. 9-13, core::KelvinLaw), incremental time stepping (eqs. 14-17, 20, 24) with a
+// full Newton iteration per step on the consistent tangent, penalty essential BCs (eqs. 19, 23).
+//
+// Unknowns are the MLS nodal PARAMETERS U_i (not nodal displacements: MLS does not interpolate), so every
+// displacement the model reports is u(X) = sum_i phi_i(X) U_i (eq. 7).
+#include <Eigen/Core>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "core/kelvin_law.hpp"
+#include "meshless/efg_problem.hpp"
+#include "meshless/integration_points.hpp"
+#include "meshless/nodal_sparsity.hpp"
+#include "meshless/penalty_boundary.hpp"
+
+namespace meshless {
+
+class NodeSearch;
+class SupportRadii;
+class MlsShapeFunctions;
+
+/// What happened in one time step.
+struct StepRecord {
+  int step = 0;             ///< 1-based
+  double time = 0.0;        ///< t_{n+1} [s]
+  double dt = 0.0;          ///< [s]
+  double load_scale = 0.0;  ///< load_scale(time)
+  int newton_iterations = 0;               ///< linear solves
+  std::vector<double> residuals;           ///< ||R|| / ||F_ext|| before each solve and after the last
+  double assembly_seconds = 0.0;
+  double solve_seconds = 0.0;
+  bool reused_factorisation = false;       ///< tangent unchanged (k = 0, same dt): factorisation reused
+};
+
+struct EfgTimings {
+  double setup_seconds = 0.0;            ///< node search, support radii, quadrature points, sparsity
+  double shape_function_seconds = 0.0;   ///< MLS tabulation at every integration point (once)
+  double assembly_seconds = 0.0;         ///< all steps
+  double solve_seconds = 0.0;            ///< all steps (factorisation + back substitution)
+};
+
+/// Sizes for reports.
+struct EfgStatistics {
+  int num_nodes = 0;
+  int num_cells = 0;
+  int num_volume_points = 0;
+  int num_boundary_points = 0;
+  double mean_nodes_per_point = 0.0;  ///< mean support size at the volume points
+  long long matrix_nonzeros = 0;
+  double alpha = 0.0;                 ///< penalty parameter [Pa/m]
+  double penalised_area = 0.0, loaded_area = 0.0;  ///< [m^2]
+  std::string linear_solver;
+};
+
+class EfgModel {
+ public:
+  EfgModel(EfgProblem problem, EfgOptions options = {});
+  ~EfgModel();
+  EfgModel(const EfgModel&) = delete;
+  EfgModel& operator=(const EfgModel&) = delete;
+
+  /// Called after every converged step that output_results() writes (step is 1-based).
+  using StepObserver = std::function<void(const EfgModel& model, const StepRecord& step)>;
+
+  /// The recipe: setup_system(); then per step: Newton (assemble_system(); solve();) and output_results().
+  void run(const StepObserver& observer = {});
+
+  /// Node search, support radii, MLS tabulation at volume and boundary points, VCI correction, sparsity,
+  /// boundary terms, one KelvinState per volume point.
+  void setup_system();
+  /// Material update at every volume point for the current parameters U and time step, then the residual
+  /// R = f_int + K^alpha U - alpha int phi u-bar - s(t) f_t (eq. 24) and, if with_matrix, the tangent
+  /// K_n + K^alpha_n of eq. 20 with the consistent E_k (eq. 21).
+  void assemble_system(bool with_matrix);
+  /// Solve (K_n + K^alpha_n) dU = -R (eq. 20) and update U (eq. 14). Throws if dU is not finite.
+  void solve();
+  /// Advance one step (1-based index into problem().step_times): Newton to convergence, then commit history.
+  StepRecord solve_step(int step);
+
+  // --- results ---------------------------------------------------------------------------------------------
+  /// u(X) = sum_i phi_i(X) U_i (eq. 7) at arbitrary material points, #points by 3 [m].
+  core::PointMatrix displacements_at(const core::PointMatrix& points) const;
+  Eigen::Vector3d displacement_at(const Eigen::Vector3d& x) const;
+  /// Displacement at the node positions (interpolated, not the parameters).
+  core::PointMatrix nodal_displacements() const { return displacements_at(nodes()); }
+  const Eigen::VectorXd& nodal_parameters() const { return u_; }  ///< 3N, the U_i
+  const core::PointMatrix& nodes() const { return problem_.mesh.vertices; }
+  /// Total engineering strain at every volume point (standard MLS gradients, eq. 17/22).
+  std::vector<core::Vector6> quadrature_strains() const;
+  const ShapeTable& volume_points() const { return volume_; }
+  const ShapeTable& boundary_points() const { return surface_; }
+  const std::vector<core::KelvinState>& states() const { return states_; }
+
+  const EfgProblem& problem() const { return problem_; }
+  const EfgOptions& options() const { return options_; }
+  const std::vector<StepRecord>& steps() const { return records_; }
+  const EfgTimings& timings() const { return timings_; }
+  const EfgStatistics& statistics() const { return stats_; }
+  const MlsShapeFunctions& shape_functions() const { return *mls_; }
+  double alpha() const { return alpha_; }
+  double residual_norm() const { return residual_.norm(); }
+  /// Largest |sum_i int grad phi_i - oint phi_i n| over nodes before the VCI correction [m^2] (diagnostic).
+  double divergence_defect() const { return divergence_defect_; }
+
+ private:
+  void update_material(double dt);
+  bool use_direct_solver() const;
+
+  EfgProblem problem_;
+  EfgOptions options_;
+  core::KelvinLaw law_;
+  double alpha_ = 0.0;
+
+  std::unique_ptr<NodeSearch> search_;
+  std::unique_ptr<SupportRadii> radii_;
+  std::unique_ptr<MlsShapeFunctions> mls_;
+  ShapeTable volume_, surface_;
+  NodeIncidence volume_incidence_, surface_incidence_;
+  std::unique_ptr<NodalSparsity> sparsity_;
+  BoundaryTerms boundary_;
+  Eigen::Matrix3Xd vci_correction_;  // 3 by N, xi_i added to test-function gradients
+  double divergence_defect_ = 0.0;
+
+  std::vector<core::KelvinState> states_;   // history at t_n, one per volume point
+  std::vector<core::Vector6> strain_, stress_;
+  std::vector<core::Matrix6> tangent_;
+
+  Eigen::VectorXd u_, residual_, external_;
+  SparseMatrix matrix_;
+  struct Factorisation;
+  std::unique_ptr<Factorisation> factorisation_;
+  double current_dt_ = 0.0;
+  double factorised_dt_ = -1.0;
+  bool matrix_current_ = false;  // matrix_ matches the current iterate
+
+  std::vector<StepRecord> records_;
+  EfgTimings timings_;
+  EfgStatistics stats_;
+  bool set_up_ = false;
+};
+
+}  // namespace meshless

@@ -1,0 +1,74 @@
+#pragma once
+// What the EFG model solves, independent of where it comes from: the lung case of a config file
+// (problem_from_case) or a verification problem built in code (patch test, cantilever, creep bar).
+#include <Eigen/Core>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "core/kelvin_law.hpp"
+#include "core/tet_mesh.hpp"
+#include "meshless/support_radii.hpp"
+
+namespace meshless {
+
+using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
+
+enum class LinearSolverKind {
+  automatic,  ///< direct below EfgOptions::direct_solver_max_dofs, iterative above
+  direct,     ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
+  iterative,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (for clouds too large to factorise)
+};
+
+/// Solver knobs with defaults; see docs/MESHLESS.md for the reasons behind each.
+struct EfgOptions {
+  double newton_tolerance = 1e-8;  ///< ||R|| <= tol * ||external force|| (eq. 24 residual)
+  int max_newton_iterations = 25;
+  /// Keep the factorised tangent while each iteration reduces ||R|| by at least this ratio; refactorise
+  /// otherwise (k != 0). 0 gives full Newton (a fresh tangent every iteration).
+  double refactor_contraction = 0.2;
+  /// Variationally consistent integration (Chen, Hillman & Rueter 2013, linear VCI): add a constant per node
+  /// to the test-function gradients so the discrete divergence theorem int grad phi_i = oint phi_i n holds
+  /// for the background quadrature. Makes the linear patch test pass to round-off; off = plain eq. 22.
+  bool variationally_consistent = true;
+  LinearSolverKind linear_solver = LinearSolverKind::automatic;
+  int direct_solver_max_dofs = 60000;
+  double iterative_tolerance = 1e-10;  ///< relative residual of the linear solve (Newton needs << newton_tolerance)
+  int iterative_max_iterations = 2000;
+};
+
+struct EfgProblem {
+  std::string name;
+  /// Vertices = EFG nodes, tets = background integration cells, boundary faces (outward) for the surface
+  /// integrals of eqs. 23-24. face_tags select where penalty and traction act unless the masks below are set.
+  core::TetMesh mesh;
+  core::KelvinParameters material;
+  SupportRadiiParams support;  ///< rho_i = d_max * distance to the k-th neighbour
+  int quadrature_order = 2;    ///< background-cell rule (tet_rule) and face rule (triangle_rule)
+  double node_spacing = 0.0;   ///< [m], scales alpha
+  double penalty_factor = 1e3; ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
+
+  /// Boundary roles per boundary face (#F). Empty -> derived from mesh.face_tags (fixed / load).
+  std::vector<char> penalised_faces;
+  std::vector<char> loaded_faces;
+  /// u-bar on the penalised faces (eq. 19, 23); empty -> zero. Held constant in time.
+  VectorField prescribed_displacement;
+  /// Traction t-bar [Pa] on the loaded faces at full load (eq. 24), scaled by load_scale(t).
+  VectorField traction;
+  std::function<double(double)> load_scale = [](double) { return 1.0; };
+  /// Times t_1 < t_2 < ... of the steps (t_0 = 0). dt = t_n - t_{n-1}; a first step at t = 0 has dt = 0,
+  /// an instantaneous (elastic, K1) response.
+  std::vector<double> step_times;
+  /// Steps at which output_results() writes (the last step is always written). Empty -> every step.
+  int output_every = 1;
+
+  double alpha() const { return penalty_factor * material.K1 / node_spacing; }
+};
+
+/// The load case of a config: meshless_mesh of the geometry, zero u-bar on the fixed faces, uniform traction
+/// force(t) / A_patch on the load faces (A_patch = area of the load-tagged faces of the meshless mesh).
+EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g);
+
+}  // namespace meshless

@@ -1,0 +1,42 @@
+#pragma once
+// Sparsity of the EFG system matrix of eq. 20: node i couples to node j when some integration point lies in
+// both supports. Each coupled node pair is a dense 3x3 block, so the pattern is built once per node pair and
+// expanded to degrees of freedom (3i + a, 3j + b). Assembly then writes straight into the CSR value array
+// instead of going through triplets (a 32k-node cloud would need ~10^10 triplets).
+#include <Eigen/SparseCore>
+#include <vector>
+
+#include "meshless/integration_points.hpp"
+
+namespace meshless {
+
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
+
+class NodalSparsity {
+ public:
+  /// @param tables the integration-point tables whose node pairs couple (volume, boundary)
+  NodalSparsity(int num_nodes, const std::vector<const ShapeTable*>& tables,
+                const std::vector<const NodeIncidence*>& incidences);
+
+  int num_nodes() const { return static_cast<int>(row_offsets_.size()) - 1; }
+  /// Coupled nodes of node i, ascending: columns_[row_offsets_[i] .. row_offsets_[i+1]).
+  int row_begin(int i) const { return row_offsets_[i]; }
+  int row_end(int i) const { return row_offsets_[i + 1]; }
+  int row_length(int i) const { return row_offsets_[i + 1] - row_offsets_[i]; }
+  int column(int k) const { return columns_[k]; }
+  long long num_block_entries() const { return static_cast<long long>(columns_.size()); }
+
+  /// A 3N by 3N row-major matrix with this pattern and zero values.
+  SparseMatrix make_matrix() const;
+
+  /// Index into the value array of entry (3i + a, 3 * column(row_begin(i) + k) + b).
+  long long value_index(int i, int a, int k, int b) const {
+    return 9LL * row_offsets_[i] + 3LL * a * row_length(i) + 3LL * k + b;
+  }
+
+ private:
+  std::vector<int> row_offsets_;  // #nodes + 1 (in node blocks)
+  std::vector<int> columns_;      // node columns
+};
+
+}  // namespace meshless

@@ -1,0 +1,87 @@
+#pragma once
+// The boundary-value problem the FEM reference solves, without any deal.II type, so that experiments,
+// tests and benchmarks can describe a problem without compiling deal.II headers.
+//
+// Small-strain quasi-static equilibrium (paper eq. 17–21) with the shared Kelvin law (core/kelvin_law.hpp),
+// stepped in time through the one-internal-variable recursion of eqs. 11–13.
+#include <Eigen/Core>
+#include <array>
+#include <functional>
+#include <vector>
+
+#include "core/kelvin_law.hpp"
+#include "core/tet_mesh.hpp"
+
+namespace reference_fem {
+
+/// Boundary ids on the deal.II triangulation. The first four equal core::FaceTag so that a case mesh
+/// carries its tags straight into deal.II; verification problems use their own ids above them.
+namespace boundary_id {
+constexpr unsigned int free_surface = static_cast<unsigned int>(core::FaceTag::free_surface);
+constexpr unsigned int fixed = static_cast<unsigned int>(core::FaceTag::fixed);
+constexpr unsigned int load = static_cast<unsigned int>(core::FaceTag::load);
+constexpr unsigned int crack = static_cast<unsigned int>(core::FaceTag::crack);
+}  // namespace boundary_id
+
+/// A time scaling of a boundary value: value(t) = scale(t) * value. Empty means 1 for all t.
+using TimeScale = std::function<double(double)>;
+
+/// A field over space and time (x [m], t [s]) -> vector, for non-uniform boundary data.
+using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d&, double)>;
+
+/// Prescribed displacement u_c = scale(t) * value_c on the components c with components[c] == true.
+/// When `field` is set it replaces scale * value (used by the cantilever verification).
+struct DirichletCondition {
+  unsigned int boundary_id = boundary_id::fixed;
+  std::array<bool, 3> components{{true, true, true}};
+  Eigen::Vector3d value = Eigen::Vector3d::Zero();  ///< [m]
+  TimeScale scale;
+  VectorField field;
+};
+
+/// Traction t = scale(t) * traction [Pa] on every face with the boundary id (uniform: the load patch).
+/// When `field` is set it replaces scale * traction.
+struct TractionCondition {
+  unsigned int boundary_id = boundary_id::load;
+  Eigen::Vector3d traction = Eigen::Vector3d::Zero();  ///< [Pa]
+  TimeScale scale;
+  VectorField field;
+};
+
+struct BoundaryConditions {
+  std::vector<DirichletCondition> dirichlet;
+  std::vector<TractionCondition> tractions;
+};
+
+/// Newton's method on the residual of eq. 21 with the consistent tangent of the Kelvin law.
+struct NewtonParameters {
+  double tolerance = 1e-8;  ///< on ||R|| / max(||R_0||, ||F_ext||, ||F_int||), constrained rows excluded
+  int max_iterations = 25;
+  /// Each Newton system K du = R (K = consistent tangent) is solved to this relative residual by GMRES,
+  /// preconditioned with the LU factors (UMFPACK) of an earlier tangent; refactor when GMRES needs more
+  /// than `refactor_after` iterations. Tight enough that Newton converges as with an exact solve.
+  double linear_tolerance = 1e-12;
+  int refactor_after = 15;
+};
+
+struct SolverParameters {
+  core::KelvinParameters material;
+  int degree = 2;          ///< FE_SimplexP degree (QGaussSimplex with degree+1 points per direction)
+  NewtonParameters newton;
+  unsigned int threads = 2;  ///< WorkStream assembly threads
+};
+
+/// What one time step did (reported per step in timings.json).
+struct StepReport {
+  int step = 0;               ///< 1-based
+  double time = 0.0;          ///< t_{n+1} [s]
+  int newton_iterations = 0;  ///< number of linear solves
+  int linear_iterations = 0;  ///< GMRES iterations over the step
+  int factorizations = 0;     ///< LU factorizations of the tangent during the step
+  std::vector<double> residuals;  ///< relative residual before each solve, then the converged one
+  double assembly_seconds = 0.0;
+  double solve_seconds = 0.0;
+  double wall_seconds = 0.0;
+};
+
+}  // namespace reference_fem

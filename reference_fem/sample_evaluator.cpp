@@ -1,0 +1,123 @@
+#include "reference_fem/sample_evaluator.hpp"
+
+#include <deal.II/fe/fe.h>
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/grid/grid_tools_cache.h>
+
+#include <limits>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+
+namespace reference_fem {
+namespace {
+
+using namespace dealii;
+
+/// Closest point of the reference tetrahedron to `p` (approximate: clamp the barycentric coordinates to
+/// >= 0 and renormalise). Exact for the tiny overshoots of surface points outside a faceted mesh.
+Point<3> clamp_to_reference_tet(const Point<3>& p) {
+  double lambda[4] = {1.0 - p[0] - p[1] - p[2], p[0], p[1], p[2]};
+  double sum = 0.0;
+  for (double& l : lambda) {
+    l = std::max(l, 0.0);
+    sum += l;
+  }
+  return Point<3>(lambda[1] / sum, lambda[2] / sum, lambda[3] / sum);
+}
+
+}  // namespace
+
+SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>& dof_handler,
+                                 const Eigen::MatrixXd& points, double tolerance)
+    : dof_handler_(dof_handler) {
+  const Triangulation<3>& tria = dof_handler.get_triangulation();
+  GridTools::Cache<3, 3> cache(tria, mapping);
+  typename Triangulation<3>::active_cell_iterator hint;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Point<3> p(points(i, 0), points(i, 1), points(i, 2));
+    Location location;
+    double offset = 0.0;
+    auto found = GridTools::find_active_cell_around_point(cache, p, hint, {}, 1e-10);
+    // deal.II may hand back its best guess even when the point is not in that cell (e.g. next to a crack,
+    // where two vertices share a position), so check the reference coordinates ourselves.
+    if (found.first != tria.end() && found.first->reference_cell().contains_point(found.second, 1e-8)) {
+      location.unit_point = found.second;
+      hint = found.first;
+    } else {
+      // Outside the faceted mesh (or next to a crack, whose duplicated nodes share one position and
+      // confuse the vertex-based search): project into each cell around every vertex at the nearest
+      // position, keep the closest.
+      const auto& vertices = tria.get_vertices();
+      const std::vector<bool>& used = tria.get_used_vertices();
+      double nearest = std::numeric_limits<double>::max();
+      for (unsigned int v = 0; v < vertices.size(); ++v)
+        if (used[v]) nearest = std::min(nearest, vertices[v].distance(p));
+      std::set<typename Triangulation<3>::active_cell_iterator> candidates;
+      for (unsigned int v = 0; v < vertices.size(); ++v)
+        if (used[v] && vertices[v].distance(p) <= nearest * (1 + 1e-9) + 1e-14)
+          for (const auto& cell : cache.get_vertex_to_cell_map()[v]) candidates.insert(cell);
+      // ...and one more ring of cells, for points in a cell that does not touch the nearest vertex.
+      std::set<typename Triangulation<3>::active_cell_iterator> ring = candidates;
+      for (const auto& cell : ring)
+        for (const unsigned int k : cell->vertex_indices())
+          for (const auto& neighbour : cache.get_vertex_to_cell_map()[cell->vertex_index(k)])
+            candidates.insert(neighbour);
+      double best = std::numeric_limits<double>::max();
+      for (const auto& cell : candidates) {
+        const Point<3> unit = clamp_to_reference_tet(mapping.transform_real_to_unit_cell(cell, p));
+        const double d = mapping.transform_unit_to_real_cell(cell, unit).distance(p);
+        if (d < best) {
+          best = d;
+          found = {cell, unit};
+        }
+      }
+      offset = best;
+      location.unit_point = found.second;
+      if (offset > tolerance) {
+        std::ostringstream msg;
+        msg << "SampleEvaluator: point " << i << " lies " << offset * 1e3 << " mm outside the FEM mesh (tolerance "
+            << tolerance * 1e3 << " mm)";
+        throw std::runtime_error(msg.str());
+      }
+    }
+    location.cell = typename DoFHandler<3>::active_cell_iterator(&tria, found.first->level(), found.first->index(),
+                                                                &dof_handler);
+    locations_.push_back(location);
+    offsets_.push_back(offset);
+  }
+}
+
+Eigen::MatrixXd SampleEvaluator::evaluate(const Vector<double>& solution) const {
+  const FiniteElement<3>& fe = dof_handler_.get_fe();
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(locations_.size()), 3);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (std::size_t i = 0; i < locations_.size(); ++i) {
+    locations_[i].cell->get_dof_indices(dofs);
+    for (unsigned int k = 0; k < fe.n_dofs_per_cell(); ++k) {
+      const unsigned int c = fe.system_to_component_index(k).first;
+      u(static_cast<Eigen::Index>(i), c) += solution(dofs[k]) * fe.shape_value(k, locations_[i].unit_point);
+    }
+  }
+  return u;
+}
+
+Eigen::MatrixXd vertex_displacements(const DoFHandler<3>& dof_handler, const Vector<double>& solution) {
+  const FiniteElement<3>& fe = dof_handler.get_fe();
+  const Triangulation<3>& tria = dof_handler.get_triangulation();
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(tria.n_vertices()), 3);
+  std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
+  for (const auto& cell : dof_handler.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (const unsigned int v : cell->vertex_indices()) {
+      const Point<3> unit = cell->reference_cell().template vertex<3>(v);
+      Eigen::Vector3d value = Eigen::Vector3d::Zero();
+      for (unsigned int k = 0; k < fe.n_dofs_per_cell(); ++k)
+        value(fe.system_to_component_index(k).first) += solution(dofs[k]) * fe.shape_value(k, unit);
+      u.row(static_cast<Eigen::Index>(cell->vertex_index(v))) = value.transpose();
+    }
+  }
+  return u;
+}
+
+}  // namespace reference_fem

@@ -1,0 +1,63 @@
+#pragma once
+// Verification problems of the FEM reference against closed forms (deal.II-free header):
+//  * uniaxial relaxation and creep of the standard linear solid (paper Fig. 2, eqs. 9–13),
+//  * the 3-D cantilever against the Timoshenko beam solution (elastic limit), for L2 convergence rates.
+#include <vector>
+
+#include "core/kelvin_law.hpp"
+
+namespace reference_fem {
+
+/// One uniaxial history: a bar [0,L]x[0,W]x[0,W] with roller symmetry planes x=0, y=0, z=0 (lateral
+/// faces free, so the 1-D formulas hold for any nu), loaded on x=L at t = 0 in an instantaneous step.
+struct UniaxialOptions {
+  core::KelvinParameters material;
+  int degree = 2;
+  double end_time = 1.0;  ///< [s]
+  int steps = 100;        ///< after the instantaneous step at t = 0
+};
+
+struct UniaxialSample {
+  double time = 0.0;      ///< [s]
+  double computed = 0.0;  ///< sigma_xx (relaxation) or eps_xx (creep) of the FEM
+  double exact = 0.0;     ///< closed form
+};
+
+struct UniaxialResult {
+  std::vector<UniaxialSample> history;
+  double max_relative_error = 0.0;
+  int max_newton_iterations = 0;
+};
+
+/// Step strain eps0 held: sigma(t) = eps0 K1/(K1+K2) [K2 + K1 exp(-t/tau)], tau = eta/(K1+K2).
+UniaxialResult run_uniaxial_relaxation(const UniaxialOptions& options, double eps0);
+/// Step stress sigma0 held: eps(t) = sigma0/K1 + sigma0/K2 (1 - exp(-K2 t/eta)).
+UniaxialResult run_uniaxial_creep(const UniaxialOptions& options, double sigma0);
+
+/// Cantilever [0,L]x[-D/2,D/2]x[0,B] clamped at x = 0 to the exact displacement, parabolic end shear P
+/// at x = L; nu = 0 so the plane-stress Timoshenko solution is an exact 3-D solution. Elastic limit:
+/// k = 0 and one instantaneous (dt = 0) step, so the modulus is K1.
+struct CantileverOptions {
+  double length = 0.1, depth = 0.02, width = 0.02;  ///< [m]
+  double force = 1.0e-3;                            ///< end shear P [N]
+  double youngs_modulus = 6000.0;                   ///< K1 [Pa]
+  int degree = 2;
+};
+
+struct CantileverLevel {
+  int subdivisions = 0;  ///< elements through the depth (5x along the length)
+  double h = 0.0;        ///< hexahedron edge before the split into tetrahedra [m]
+  std::size_t n_dofs = 0;
+  double l2_error = 0.0;           ///< ||u_h - u||_L2 / ||u||_L2
+  double tip_deflection = 0.0;     ///< FEM u_y at (L, 0, B/2) [m]
+  double exact_tip_deflection = 0.0;
+  double seconds = 0.0;
+  int newton_iterations = 0;
+};
+
+CantileverLevel run_cantilever(const CantileverOptions& options, int subdivisions);
+
+/// Least-squares slope of log(error) against log(h) over the levels.
+double convergence_rate(const std::vector<CantileverLevel>& levels);
+
+}  // namespace reference_fem

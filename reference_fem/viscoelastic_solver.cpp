@@ -1,0 +1,387 @@
+#include "reference_fem/viscoelastic_solver.hpp"
+
+#include <deal.II/base/multithread_info.h>
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/base/work_stream.h>
+#include <deal.II/dofs/dof_tools.h>
+#include <deal.II/fe/fe_simplex_p.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/full_matrix.h>
+#include <deal.II/lac/solver_control.h>
+#include <deal.II/lac/solver_gmres.h>
+#include <deal.II/lac/sparse_direct.h>
+#include <deal.II/numerics/data_out.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <Eigen/Core>
+#include <chrono>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+namespace reference_fem {
+namespace {
+
+using namespace dealii;
+
+// Engineering Voigt strain [xx, yy, zz, 2xy, 2yz, 2zx] (core/voigt.hpp, the paper's operator L, eq. 17).
+core::Vector6 to_voigt(const SymmetricTensor<2, 3>& e) {
+  core::Vector6 v;
+  v << e[0][0], e[1][1], e[2][2], 2.0 * e[0][1], 2.0 * e[1][2], 2.0 * e[2][0];
+  return v;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+ComponentMask mask_of(const std::array<bool, 3>& components) {
+  return ComponentMask(std::vector<bool>(components.begin(), components.end()));
+}
+
+/// A DirichletCondition as a deal.II Function at time t.
+class DirichletFunction : public Function<3> {
+ public:
+  DirichletFunction(const DirichletCondition& condition, double t) : Function<3>(3), condition_(condition), t_(t) {}
+  void vector_value(const Point<3>& p, Vector<double>& values) const override {
+    Eigen::Vector3d v;
+    if (condition_.field)
+      v = condition_.field(Eigen::Vector3d(p[0], p[1], p[2]), t_);
+    else
+      v = (condition_.scale ? condition_.scale(t_) : 1.0) * condition_.value;
+    for (unsigned int c = 0; c < 3; ++c) values(c) = v(c);
+  }
+  double value(const Point<3>& p, const unsigned int component) const override {
+    Vector<double> v(3);
+    vector_value(p, v);
+    return v(component);
+  }
+
+ private:
+  const DirichletCondition& condition_;
+  double t_;
+};
+
+}  // namespace
+
+// Per-thread work space of the WorkStream assembly (copyable: WorkStream clones it per thread).
+struct ViscoelasticSolver::ScratchData {
+  ScratchData(const Mapping<3>& mapping, const FiniteElement<3>& fe, const Quadrature<3>& quadrature,
+              const Quadrature<2>& face_quadrature)
+      : fe_values(mapping, fe, quadrature, update_gradients | update_JxW_values),
+        fe_face_values(mapping, fe, face_quadrature, update_values | update_quadrature_points | update_JxW_values),
+        strains(quadrature.size()) {}
+  ScratchData(const ScratchData& other)
+      : fe_values(other.fe_values.get_mapping(), other.fe_values.get_fe(), other.fe_values.get_quadrature(),
+                  other.fe_values.get_update_flags()),
+        fe_face_values(other.fe_face_values.get_mapping(), other.fe_face_values.get_fe(),
+                       other.fe_face_values.get_quadrature(), other.fe_face_values.get_update_flags()),
+        strains(other.strains.size()) {}
+
+  FEValues<3> fe_values;
+  FEFaceValues<3> fe_face_values;
+  std::vector<SymmetricTensor<2, 3>> strains;
+};
+
+struct ViscoelasticSolver::CopyData {
+  FullMatrix<double> cell_matrix;
+  Vector<double> cell_rhs;
+  Vector<double> cell_external;
+  Vector<double> cell_internal;
+  std::vector<types::global_dof_index> local_dof_indices;
+};
+
+ViscoelasticSolver::ViscoelasticSolver(const Triangulation<3>& triangulation, const SolverParameters& parameters,
+                                       BoundaryConditions conditions)
+    : triangulation_(triangulation),
+      parameters_(parameters),
+      conditions_(std::move(conditions)),
+      law_(parameters.material),
+      fe_(FE_SimplexP<3>(static_cast<unsigned int>(parameters.degree)), 3),
+      mapping_(FE_SimplexP<3>(1)),
+      dof_handler_(triangulation),
+      timer_(timer_sink_, TimerOutput::never, TimerOutput::wall_times) {
+  if (parameters.degree < 1 || parameters.degree > 3)
+    throw std::invalid_argument("ViscoelasticSolver: degree must be 1, 2 or 3");
+  MultithreadInfo::set_thread_limit(std::max(1u, parameters.threads));
+}
+
+void ViscoelasticSolver::setup_system() {
+  TimerOutput::Scope scope(timer_, "setup");
+  dof_handler_.distribute_dofs(fe_);
+
+  zero_constraints_.clear();
+  for (const auto& d : conditions_.dirichlet)
+    VectorTools::interpolate_boundary_values(mapping_, dof_handler_, d.boundary_id, Functions::ZeroFunction<3>(3),
+                                             zero_constraints_, mask_of(d.components));
+  zero_constraints_.close();
+
+  DynamicSparsityPattern dsp(dof_handler_.n_dofs());
+  DoFTools::make_sparsity_pattern(dof_handler_, dsp, zero_constraints_, false);
+  sparsity_pattern_.copy_from(dsp);
+  system_matrix_.reinit(sparsity_pattern_);
+  factorization_.reset();
+  solution_.reinit(dof_handler_.n_dofs());
+  newton_update_.reinit(dof_handler_.n_dofs());
+  system_rhs_.reinit(dof_handler_.n_dofs());
+
+  n_q_points_ = QGaussSimplex<3>(static_cast<unsigned int>(parameters_.degree + 1)).size();
+  history_.assign(static_cast<std::size_t>(triangulation_.n_active_cells()) * n_q_points_, PointHistory{});
+  time_ = 0.0;
+}
+
+void ViscoelasticSolver::apply_dirichlet_values(double t_new) {
+  // Start Newton from a displacement that already satisfies u = g(t_{n+1}) on the Dirichlet rows; the
+  // updates then obey the homogeneous constraints.
+  AffineConstraints<double> values;
+  for (const auto& d : conditions_.dirichlet) {
+    VectorTools::interpolate_boundary_values(mapping_, dof_handler_, d.boundary_id, DirichletFunction(d, t_new), values,
+                                             mask_of(d.components));
+  }
+  values.close();
+  values.distribute(solution_);
+}
+
+void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cell_iterator& cell,
+                                        ScratchData& scratch, CopyData& copy) const {
+  const unsigned int n = fe_.n_dofs_per_cell();
+  copy.cell_matrix.reinit(n, n);
+  copy.cell_rhs.reinit(n);
+  copy.cell_external.reinit(n);
+  copy.cell_internal.reinit(n);
+  copy.local_dof_indices.resize(n);
+  cell->get_dof_indices(copy.local_dof_indices);
+
+  const FEValuesExtractors::Vector u(0);
+  scratch.fe_values.reinit(cell);
+  scratch.fe_values[u].get_function_symmetric_gradients(solution_, scratch.strains);
+
+  // B columns: engineering Voigt strain of each shape function, so that K = sum B^T D B JxW (eq. 21)
+  // with D = E_k dN/deps, the consistent tangent of eq. 13 (non-symmetric when k != 0).
+  Eigen::Matrix<double, 6, Eigen::Dynamic> B(6, n);
+  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  Eigen::VectorXd internal = Eigen::VectorXd::Zero(n);
+  const std::size_t first = cell->active_cell_index() * n_q_points_;
+  for (unsigned int q = 0; q < n_q_points_; ++q) {
+    const core::KelvinResponse response =
+        law_.update(history_[first + q].state, to_voigt(scratch.strains[q]), step_dt_);
+    for (unsigned int i = 0; i < n; ++i) B.col(i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
+    const double jxw = scratch.fe_values.JxW(q);
+    K.noalias() += B.transpose() * (response.tangent * B) * jxw;
+    internal.noalias() += B.transpose() * response.stress * jxw;
+  }
+  for (unsigned int i = 0; i < n; ++i) {
+    copy.cell_rhs(i) = -internal(i);
+    copy.cell_internal(i) = internal(i);
+    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = K(i, j);
+  }
+
+  // Uniform tractions (the load patch: force(t) / patch area).
+  for (const auto f : cell->face_indices()) {
+    if (!cell->face(f)->at_boundary()) continue;
+    for (const auto& t : conditions_.tractions) {
+      if (cell->face(f)->boundary_id() != t.boundary_id) continue;
+      const double s = t.scale ? t.scale(step_time_) : 1.0;
+      Tensor<1, 3> traction;
+      for (unsigned int c = 0; c < 3; ++c) traction[c] = s * t.traction(c);
+      scratch.fe_face_values.reinit(cell, f);
+      for (unsigned int q = 0; q < scratch.fe_face_values.n_quadrature_points; ++q)
+        for (unsigned int i = 0; i < n; ++i) {
+          if (t.field) {
+            const Point<3>& x = scratch.fe_face_values.quadrature_point(q);
+            const Eigen::Vector3d v = t.field(Eigen::Vector3d(x[0], x[1], x[2]), step_time_);
+            for (unsigned int c = 0; c < 3; ++c) traction[c] = v(c);
+          }
+          const double v = scratch.fe_face_values[u].value(i, q) * traction * scratch.fe_face_values.JxW(q);
+          copy.cell_rhs(i) += v;
+          copy.cell_external(i) += v;
+        }
+    }
+  }
+}
+
+double ViscoelasticSolver::assemble_system(double t_new, double dt) {
+  TimerOutput::Scope scope(timer_, "assembly");
+  step_time_ = t_new;
+  step_dt_ = dt;
+  system_matrix_ = 0.0;
+  system_rhs_ = 0.0;
+  Vector<double> external(dof_handler_.n_dofs()), internal(dof_handler_.n_dofs());
+  const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
+  ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
+  WorkStream::run(
+      dof_handler_.begin_active(), dof_handler_.end(),
+      [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
+        local_assemble(cell, s, c);
+      },
+      [this, &external, &internal](const CopyData& c) {
+        internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
+        zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, system_matrix_,
+                                                     system_rhs_);
+        zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
+      },
+      scratch, CopyData());
+  external_force_norm_ = external.l2_norm();
+  internal_force_norm_ = internal.l2_norm();
+  return system_rhs_.l2_norm();
+}
+
+void ViscoelasticSolver::solve() {
+  TimerOutput::Scope scope(timer_, "solve");
+  // The consistent tangent is non-symmetric for k != 0 (docs/MATERIAL.md §1.4), so: GMRES on the exact
+  // tangent, preconditioned by the LU factors of an earlier tangent. The tangent changes only through
+  // dN/deps (a few per cent for tissue strains), so a few GMRES iterations reach 1e-12 and the costly
+  // factorization is reused over Newton iterations and time steps.
+  const auto factorize = [this] {
+    factorization_ = std::make_unique<SparseDirectUMFPACK>();
+    factorization_->initialize(system_matrix_);
+    refactor_ = false;
+    ++factorizations_;
+  };
+  if (!factorization_ || refactor_) factorize();
+  newton_update_ = 0.0;
+  const double target = parameters_.newton.linear_tolerance * system_rhs_.l2_norm();
+  SolverControl control(200, target, false, false);
+  SolverGMRES<Vector<double>> gmres(control, SolverGMRES<Vector<double>>::AdditionalData(60, true));  // right: true residual
+  try {
+    gmres.solve(system_matrix_, newton_update_, system_rhs_, *factorization_);
+  } catch (const SolverControl::NoConvergence&) {
+    factorize();  // the stored factors went stale: solve exactly with fresh ones
+    factorization_->vmult(newton_update_, system_rhs_);
+  }
+  last_linear_iterations_ = static_cast<int>(control.last_step());
+  if (last_linear_iterations_ > parameters_.newton.refactor_after) refactor_ = true;
+  zero_constraints_.distribute(newton_update_);
+  solution_ += newton_update_;
+}
+
+void ViscoelasticSolver::update_history(double dt) {
+  TimerOutput::Scope scope(timer_, "history");
+  const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
+  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_gradients);
+  std::vector<SymmetricTensor<2, 3>> strains(n_q_points_);
+  const FEValuesExtractors::Vector u(0);
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    fe_values[u].get_function_symmetric_gradients(solution_, strains);
+    const std::size_t first = cell->active_cell_index() * n_q_points_;
+    for (unsigned int q = 0; q < n_q_points_; ++q) {
+      const core::KelvinState old_state = history_[first + q].state;
+      law_.update(old_state, to_voigt(strains[q]), dt, &history_[first + q].state);
+    }
+  }
+}
+
+StepReport ViscoelasticSolver::do_time_step(double t_new) {
+  const auto start = std::chrono::steady_clock::now();
+  const double dt = t_new - time_;
+  if (!(dt >= 0.0)) throw std::invalid_argument("ViscoelasticSolver: time steps must not go backwards");
+  StepReport report;
+  report.time = t_new;
+  apply_dirichlet_values(t_new);
+
+  double reference = 0.0;
+  for (int iteration = 0;; ++iteration) {
+    const auto t_assembly = std::chrono::steady_clock::now();
+    const double norm = assemble_system(t_new, dt);
+    report.assembly_seconds += seconds_since(t_assembly);
+    if (!std::isfinite(norm)) throw std::runtime_error("ViscoelasticSolver: the residual is not finite");
+    // Relative residual: scaled by the largest of the first residual of the step, the external load and
+    // the internal force (reactions included), so that a step that barely changes (relaxation or creep
+    // under a held load) is measured against the forces in the body, not against round-off.
+    if (iteration == 0) reference = std::max({norm, external_force_norm_, internal_force_norm_});
+    const double relative = reference > 0.0 ? norm / reference : 0.0;
+    report.residuals.push_back(relative);
+    if (relative <= parameters_.newton.tolerance) break;
+    if (iteration >= parameters_.newton.max_iterations)
+      throw std::runtime_error("ViscoelasticSolver: Newton did not converge at t = " + std::to_string(t_new) +
+                               " s (relative residual " + std::to_string(relative) + " after " +
+                               std::to_string(iteration) + " iterations)");
+    const auto t_solve = std::chrono::steady_clock::now();
+    const int factorizations_before = factorizations_;
+    solve();
+    report.solve_seconds += seconds_since(t_solve);
+    report.linear_iterations += last_linear_iterations_;
+    report.factorizations += factorizations_ - factorizations_before;
+    ++report.newton_iterations;
+  }
+  update_history(dt);
+  time_ = t_new;
+  report.wall_seconds = seconds_since(start);
+  return report;
+}
+
+void ViscoelasticSolver::run(const std::vector<double>& times, const std::function<void(const StepReport&)>& on_step) {
+  int step = 0;
+  for (const double t : times) {
+    StepReport report = do_time_step(t);
+    report.step = ++step;
+    if (on_step) on_step(report);
+  }
+}
+
+void ViscoelasticSolver::output_results(const std::string& vtu_path) const {
+  TimerOutput::Scope scope(timer_, "output");
+  DataOut<3> data_out;
+  data_out.attach_dof_handler(dof_handler_);
+  const std::vector<std::string> names(3, "displacement");
+  const std::vector<DataComponentInterpretation::DataComponentInterpretation> interpretation(
+      3, DataComponentInterpretation::component_is_part_of_vector);
+  data_out.add_data_vector(solution_, names, DataOut<3>::type_dof_data, interpretation);
+  data_out.build_patches(mapping_, static_cast<unsigned int>(parameters_.degree));
+  std::ofstream out(vtu_path);
+  if (!out) throw std::runtime_error("cannot write " + vtu_path);
+  data_out.write_vtu(out);
+}
+
+std::map<std::string, double> ViscoelasticSolver::section_seconds() const {
+  return timer_.get_summary_data(TimerOutput::total_wall_time);
+}
+
+core::Vector6 ViscoelasticSolver::average_stress() const {
+  core::Vector6 sum = core::Vector6::Zero();
+  double volume = 0.0;
+  const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
+  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values);
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    const std::size_t first = cell->active_cell_index() * n_q_points_;
+    for (unsigned int q = 0; q < n_q_points_; ++q) {
+      sum += history_[first + q].state.stress * fe_values.JxW(q);
+      volume += fe_values.JxW(q);
+    }
+  }
+  return sum / volume;
+}
+
+core::Vector6 ViscoelasticSolver::average_strain() const {
+  core::Vector6 sum = core::Vector6::Zero();
+  double volume = 0.0;
+  const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
+  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values);
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    const std::size_t first = cell->active_cell_index() * n_q_points_;
+    for (unsigned int q = 0; q < n_q_points_; ++q) {
+      sum += history_[first + q].state.strain * fe_values.JxW(q);
+      volume += fe_values.JxW(q);
+    }
+  }
+  return sum / volume;
+}
+
+double ViscoelasticSolver::boundary_area(unsigned int id) const {
+  FEFaceValues<3> fe_face_values(mapping_, fe_, QGaussSimplex<2>(2), update_JxW_values);
+  double area = 0.0;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    for (const auto f : cell->face_indices())
+      if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == id) {
+        fe_face_values.reinit(cell, f);
+        for (unsigned int q = 0; q < fe_face_values.n_quadrature_points; ++q) area += fe_face_values.JxW(q);
+      }
+  return area;
+}
+
+}  // namespace reference_fem

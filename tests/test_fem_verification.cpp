@@ -1,0 +1,72 @@
+// The FEM reference against closed forms (reference_fem/verification.hpp):
+//  * uniaxial relaxation and creep of the standard linear solid (paper Fig. 2, eqs. 9–13) < 0.5 %,
+//  * the Timoshenko cantilever in the elastic limit: L2 displacement error converges at rate >= 2.5
+//    for FE_SimplexP degree 2 (theory: 3).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "reference_fem/verification.hpp"
+
+namespace reference_fem {
+namespace {
+
+core::KelvinParameters soft_tissue(double nu) {
+  core::KelvinParameters p;
+  p.K1 = 2000.0;
+  p.K2 = 1000.0;
+  p.eta = 600.0;  // tau = 0.2 s, creep time eta/K2 = 0.6 s
+  p.nu = nu;
+  p.k = 0.0;
+  return p;
+}
+
+TEST(FemUniaxial, RelaxationMatchesClosedForm) {
+  UniaxialOptions o;
+  o.material = soft_tissue(0.3);  // lateral faces free: the 1-D formula holds for any nu
+  o.end_time = 1.0;               // 5 tau
+  o.steps = 20;
+  const UniaxialResult r = run_uniaxial_relaxation(o, 0.01);
+  ASSERT_EQ(r.history.size(), 21u);
+  // sigma(0) = eps0 K1 and sigma(inf) -> eps0 K1 K2/(K1+K2)
+  EXPECT_NEAR(r.history.front().computed, 0.01 * 2000.0, 1e-9);
+  EXPECT_NEAR(r.history.back().computed, r.history.back().exact, 1e-6);
+  std::cout << "relaxation: max relative error " << r.max_relative_error << ", max Newton iterations "
+            << r.max_newton_iterations << "\n";
+  EXPECT_LT(r.max_relative_error, 5e-3);
+  EXPECT_LE(r.max_newton_iterations, 2);  // k = 0: linear, one solve (+ possibly a round-off polish)
+}
+
+TEST(FemUniaxial, CreepMatchesClosedForm) {
+  UniaxialOptions o;
+  o.material = soft_tissue(0.0);
+  o.end_time = 3.0;  // 5 creep times
+  o.steps = 150;     // dt = tau/10
+  const UniaxialResult r = run_uniaxial_creep(o, 100.0);
+  ASSERT_EQ(r.history.size(), 151u);
+  EXPECT_NEAR(r.history.front().computed, 100.0 / 2000.0, 1e-9);  // instantaneous response sigma0/K1
+  std::cout << "creep: max relative error " << r.max_relative_error << "\n";
+  EXPECT_LT(r.max_relative_error, 5e-3);
+  EXPECT_GT(r.history.back().computed, 2.9 * r.history.front().computed);  // creeps to sigma0 (1/K1 + 1/K2)
+}
+
+TEST(FemCantilever, L2ErrorConvergesAtRateThreeForDegreeTwo) {
+  CantileverOptions o;
+  std::vector<CantileverLevel> levels;
+  for (int n : {1, 2, 4}) {
+    levels.push_back(run_cantilever(o, n));
+    const auto& l = levels.back();
+    std::cout << "n " << n << " dofs " << l.n_dofs << " L2 " << l.l2_error << " tip " << l.tip_deflection << " exact "
+              << l.exact_tip_deflection << "\n";
+    EXPECT_EQ(l.newton_iterations, 1);
+  }
+  const double rate = convergence_rate(levels);
+  std::cout << "L2 rate " << rate << "\n";
+  EXPECT_GE(rate, 2.5);
+  EXPECT_LT(levels.back().l2_error, 1e-3);
+  EXPECT_NEAR(levels.back().tip_deflection / levels.back().exact_tip_deflection, 1.0, 1e-3);
+}
+
+}  // namespace
+}  // namespace reference_fem
