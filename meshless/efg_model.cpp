@@ -5,7 +5,6 @@
 
 #include <Eigen/IterativeLinearSolvers>
 #include <limits>
-#include <Eigen/SparseLU>
 #include <Eigen/UmfPackSupport>
 #include <algorithm>
 #include <chrono>
