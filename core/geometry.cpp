@@ -187,28 +187,35 @@ void finish_topology(TetMesh* mesh) {
   mesh->vertex_fixed.assign(mesh->num_vertices(), 0);
 }
 
+// Vertices that Gmsh placed on an imprinted region boundary lie on it only up to round-off.
+constexpr double kRegionTolerance = 5e-5;  // [m]; OCC intersection curves are accurate to ~1e-3 mm
+
 bool in_fixed_region(const FixedRegionSpec& r, const Eigen::Vector3d& x) {
-  if (r.kind == FixedRegionSpec::Kind::near_point) return (x - r.point).norm() <= r.distance;
-  return std::abs((x - r.point).dot(r.normal)) <= r.distance;
+  if (r.kind == FixedRegionSpec::Kind::near_point) return (x - r.point).norm() <= r.distance + kRegionTolerance;
+  return std::abs((x - r.point).dot(r.normal)) <= r.distance + kRegionTolerance;
 }
 
 /// Tag fixed and load faces; errors name the case file and the JSON path of the selector.
+/// `conforming`: the mesh conforms to the imprinted load circle, so a face is in the patch exactly when all
+/// its vertices are; otherwise the face centroid decides (the patch edge is then ragged at the mesh scale).
 void tag_regions(const Case& c, const Eigen::Vector3d& load_centre, const Eigen::Vector3d& load_normal,
-                 const char* which, TetMesh* mesh) {
+                 const char* which, bool conforming, TetMesh* mesh) {
   int n_fixed = 0, n_load = 0, n_overlap = 0;
   for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
-    bool all_fixed = true;
+    bool all_fixed = true, all_loaded = true;
     Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d x = mesh->vertices.row(mesh->boundary_faces(f, k));
       all_fixed = all_fixed && in_fixed_region(c.fixed_region, x);
+      all_loaded = all_loaded && (x - load_centre).norm() <= c.load.radius + kRegionTolerance;
       centroid += x / 3.0;
     }
     const Eigen::Vector3d a = mesh->vertices.row(mesh->boundary_faces(f, 0));
     const Eigen::Vector3d b = mesh->vertices.row(mesh->boundary_faces(f, 1));
     const Eigen::Vector3d cc = mesh->vertices.row(mesh->boundary_faces(f, 2));
     const Eigen::Vector3d normal = (b - a).cross(cc - a).normalized();
-    const bool in_load = (centroid - load_centre).norm() <= c.load.radius && normal.dot(load_normal) > 0.0;
+    const bool near = conforming ? all_loaded : (centroid - load_centre).norm() <= c.load.radius;
+    const bool in_load = near && normal.dot(load_normal) > 0.0;
     if (all_fixed) {
       mesh->face_tags[f] = FaceTag::fixed;
       for (int k = 0; k < 3; ++k) mesh->vertex_fixed[mesh->boundary_faces(f, k)] = 1;
@@ -370,11 +377,56 @@ TriangleSurface reference_surface(const Case& c, double* reference_volume) {
 }
 
 /// Tetrahedra of the case's body at `size` [m].
-TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const RuledSurface* cut = nullptr) {
+/// Imprint the fixed region (near_point) and the load patch on the built-in lung by fragmenting the body
+/// with the selector balls, so every mesh conforms to the region boundaries. The tagged fixed and loaded
+/// areas then do not change with the mesh size, which the FEM mesh-convergence study needs. The pieces of
+/// the balls outside the body are removed. Returns false when nothing could be imprinted.
+bool imprint_regions(const Case& c, int volume, const Eigen::Vector3d& load_centre) {
+  gmsh::vectorpair tools;
+  if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
+    const Eigen::Vector3d p = c.fixed_region.point / 1e-3;
+    tools.push_back({3, gmsh::model::occ::addSphere(p.x(), p.y(), p.z(), c.fixed_region.distance / 1e-3)});
+  }
+  const Eigen::Vector3d q = load_centre / 1e-3;
+  tools.push_back({3, gmsh::model::occ::addSphere(q.x(), q.y(), q.z(), c.load.radius / 1e-3)});
+  gmsh::vectorpair out;
+  std::vector<gmsh::vectorpair> out_map;
+  gmsh::model::occ::fragment({{3, volume}}, tools, out, out_map);
+  std::vector<int> body;
+  for (const auto& piece : out_map.at(0)) body.push_back(piece.second);
+  gmsh::vectorpair outside;
+  for (const auto& piece : out)
+    if (piece.first == 3 && std::find(body.begin(), body.end(), piece.second) == body.end())
+      outside.push_back(piece);
+  gmsh::model::occ::remove(outside, /*recursive=*/true);
+  gmsh::model::occ::synchronize();
+  return true;
+}
+
+/// Refine under the probe: elements of at most r/2 within 1.5 r of the load centre (Gmsh Ball field), so
+/// the imprinted patch circle is resolved even on coarse meshes. Model units.
+void refine_near_load(const Eigen::Vector3d& centre, double radius, double size) {
+  const int ball = gmsh::model::mesh::field::add("Ball");
+  gmsh::model::mesh::field::setNumber(ball, "XCenter", centre.x());
+  gmsh::model::mesh::field::setNumber(ball, "YCenter", centre.y());
+  gmsh::model::mesh::field::setNumber(ball, "ZCenter", centre.z());
+  gmsh::model::mesh::field::setNumber(ball, "Radius", 1.5 * radius);
+  gmsh::model::mesh::field::setNumber(ball, "Thickness", radius);
+  gmsh::model::mesh::field::setNumber(ball, "VIn", std::min(size, 0.5 * radius));
+  gmsh::model::mesh::field::setNumber(ball, "VOut", size);
+  gmsh::model::mesh::field::setAsBackgroundMesh(ball);
+}
+
+TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const Eigen::Vector3d& load_centre,
+                  bool* conforming, const RuledSurface* cut = nullptr) {
   TetMesh mesh;
+  *conforming = false;
   if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
     gmsh::clear();
     const int volume = add_builtin_lung();
+    // The crack embedding works on the single body volume, so regions are imprinted on uncut bodies only.
+    if (!cut) *conforming = imprint_regions(c, volume, load_centre);
+    refine_near_load(load_centre / 1e-3, c.load.radius / 1e-3, size / 1e-3);
     // The FEM crack (core/crack_embedding.hpp): embed the cut, mesh, then duplicate its nodes.
     const std::optional<CrackEmbedding> crack =
         cut ? std::optional(embed_cut_in_volume(volume, *cut, 1e-3, kCrackExtension)) : std::nullopt;
@@ -449,13 +501,16 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
-    g.fem_mesh = mesh_body(c, g.surface, h, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
-    tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
+    bool conforming = false;
+    g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, &conforming,
+                           g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
+    tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", conforming, &g.fem_mesh);
     if (g.cut) tag_crack_faces(*g.cut, kCrackExtension, &g.fem_mesh);
   }
   if (options.build_node_cloud) {
-    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing);
-    tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
+    bool conforming = false;
+    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre, &conforming);
+    tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", conforming, &g.meshless_mesh);
   }
   return g;
 }
