@@ -403,18 +403,33 @@ bool imprint_regions(const Case& c, int volume, const Eigen::Vector3d& load_cent
   return true;
 }
 
-/// Refine under the probe: elements of at most r/2 within 1.5 r of the load centre (Gmsh Ball field), so
-/// the imprinted patch circle is resolved even on coarse meshes. Model units.
-void refine_near_load(const Eigen::Vector3d& centre, double radius, double size) {
+/// A Gmsh Ball size field: `inside` within `radius` of `centre`, growing to `outside` over `thickness`.
+int add_ball_field(const Eigen::Vector3d& centre, double radius, double thickness, double inside, double outside) {
   const int ball = gmsh::model::mesh::field::add("Ball");
   gmsh::model::mesh::field::setNumber(ball, "XCenter", centre.x());
   gmsh::model::mesh::field::setNumber(ball, "YCenter", centre.y());
   gmsh::model::mesh::field::setNumber(ball, "ZCenter", centre.z());
-  gmsh::model::mesh::field::setNumber(ball, "Radius", 1.5 * radius);
-  gmsh::model::mesh::field::setNumber(ball, "Thickness", radius);
-  gmsh::model::mesh::field::setNumber(ball, "VIn", std::min(size, 0.5 * radius));
-  gmsh::model::mesh::field::setNumber(ball, "VOut", size);
-  gmsh::model::mesh::field::setAsBackgroundMesh(ball);
+  gmsh::model::mesh::field::setNumber(ball, "Radius", radius);
+  gmsh::model::mesh::field::setNumber(ball, "Thickness", thickness);
+  gmsh::model::mesh::field::setNumber(ball, "VIn", inside);
+  gmsh::model::mesh::field::setNumber(ball, "VOut", outside);
+  return ball;
+}
+
+/// Refine where the solution is sensitive to the region boundaries: elements of at most r/2 within 1.5 r of
+/// the load centre (so the imprinted patch circle is resolved even on coarse meshes), and of at most d/4
+/// around a near_point fixed region (the body hangs from it). Model units (mm).
+void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size) {
+  const double r = c.load.radius / 1e-3;
+  std::vector<double> fields{static_cast<double>(
+      add_ball_field(load_centre / 1e-3, 1.5 * r, r, std::min(size, 0.5 * r), size))};
+  if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
+    const double d = c.fixed_region.distance / 1e-3;
+    fields.push_back(add_ball_field(c.fixed_region.point / 1e-3, 1.2 * d, 0.5 * d, std::min(size, 0.25 * d), size));
+  }
+  const int min_field = gmsh::model::mesh::field::add("Min");
+  gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
+  gmsh::model::mesh::field::setAsBackgroundMesh(min_field);
 }
 
 TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const Eigen::Vector3d& load_centre,
@@ -426,7 +441,7 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
     const int volume = add_builtin_lung();
     // The crack embedding works on the single body volume, so regions are imprinted on uncut bodies only.
     if (!cut) *conforming = imprint_regions(c, volume, load_centre);
-    refine_near_load(load_centre / 1e-3, c.load.radius / 1e-3, size / 1e-3);
+    refine_regions(c, load_centre, size / 1e-3);
     // The FEM crack (core/crack_embedding.hpp): embed the cut, mesh, then duplicate its nodes.
     const std::optional<CrackEmbedding> crack =
         cut ? std::optional(embed_cut_in_volume(volume, *cut, 1e-3, kCrackExtension)) : std::nullopt;
