@@ -8,6 +8,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <map>
 #include <optional>
 #include <queue>
@@ -488,7 +489,17 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
   const SurfacePoint load = snap(c, g.surface, c.load.point, load_tolerance, "/load/point", "the load point");
   g.load_centre = load.point;
   g.load_normal = load.normal;
-  if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
+  if (c.fixed_region.kind == FixedRegionSpec::Kind::near_plane) {
+    double nearest = std::numeric_limits<double>::infinity();
+    for (Eigen::Index i = 0; i < g.surface.vertices.rows(); ++i)
+      nearest = std::min(nearest, std::abs((Eigen::Vector3d(g.surface.vertices.row(i)) - c.fixed_region.point)
+                                               .dot(c.fixed_region.normal)));
+    if (nearest > c.fixed_region.distance)
+      throw CaseError(c.source_file, "/fixed_region",
+                      fmt::format("selects no part of the surface: the body is {:.1f} mm from the plane but the "
+                                  "distance is {:.1f} mm; expected a distance larger than that",
+                                  nearest * 1e3, c.fixed_region.distance * 1e3));
+  } else {
     const SurfacePoint p = g.surface.closest_point(c.fixed_region.point);
     if (p.distance > c.fixed_region.distance)
       throw CaseError(c.source_file, "/fixed_region",

@@ -102,8 +102,9 @@ TEST_F(BadCase, MissingRequiredKey) {
 }
 
 TEST_F(BadCase, EmptyFixedRegion) {
-  base_["fixed_region"]["point"] = {62.0, 0.0, 10.0};
-  base_["fixed_region"]["distance"] = 0.5;
+  // A slab 5 mm either side of the plane x = 200 mm misses the body (x spans -78 .. 62 mm).
+  base_["fixed_region"] = {{"type", "near_plane"}, {"point", {200.0, 0.0, 0.0}}, {"normal", {1.0, 0.0, 0.0}},
+                           {"distance", 5.0}};
   expect_error(write_case(base_), {"/fixed_region", "selects no"});
 }
 
