@@ -5,7 +5,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/install_dependencies.sh
 scripts/build.sh
-if build/bin/tissue reproduce --help >/dev/null 2>&1; then
+# A subcommand exists when `tissue --help` lists it (`tissue X --help` exits 0 even for an unknown X).
+has_command() { build/bin/tissue "$@" --help 2>/dev/null | grep -qE "^Usage: .*tissue $* "; }
+if has_command reproduce; then
   build/bin/tissue reproduce --out results/reproduce
 else
   echo "[reproduce] 'tissue reproduce' is not implemented yet (it needs the comparator);"
@@ -15,7 +17,7 @@ else
     build/bin/tissue case check "$case"
     build/bin/tissue case mesh "$case" --out "results/$name/geometry"
     for model in fem meshless; do
-      if build/bin/tissue solve "$model" --help >/dev/null 2>&1; then
+      if has_command solve "$model"; then
         build/bin/tissue solve "$model" "$case" --out "results/$name/$model"
       fi
     done
