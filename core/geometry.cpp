@@ -42,29 +42,37 @@ int add_builtin_lung() {
   return out[0].second;
 }
 
-/// Read the current mesh's triangles (all surfaces) into a TriangleSurface scaled to metres.
-TriangleSurface extract_surface_triangles(double to_m) {
+/// The current Gmsh mesh's elements of one type as (vertices in metres, connectivity). Nodes are numbered
+/// densely in order of first use, so only the nodes those elements reference are kept.
+template <int N>
+void read_elements(int element_type, double to_m, PointMatrix* vertices,
+                   Eigen::Matrix<int, Eigen::Dynamic, N, Eigen::RowMajor>* cells) {
   std::vector<std::size_t> elem_tags, node_tags;
-  gmsh::model::mesh::getElementsByType(2, elem_tags, node_tags);
+  gmsh::model::mesh::getElementsByType(element_type, elem_tags, node_tags);
   std::vector<std::size_t> all_tags;
   std::vector<double> coords, param;
   gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
-  std::unordered_map<std::size_t, int> index;
-  TriangleSurface s;
-  std::vector<Eigen::Vector3d> pts;
   std::unordered_map<std::size_t, std::size_t> tag_to_coord;
   for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
-  s.triangles.resize(static_cast<Eigen::Index>(node_tags.size() / 3), 3);
+  std::unordered_map<std::size_t, int> index;
+  std::vector<Eigen::Vector3d> pts;
+  cells->resize(static_cast<Eigen::Index>(node_tags.size() / N), N);
   for (std::size_t k = 0; k < node_tags.size(); ++k) {
     auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(pts.size()));
     if (inserted) {
       const std::size_t c = tag_to_coord.at(node_tags[k]);
       pts.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
     }
-    s.triangles(static_cast<Eigen::Index>(k / 3), static_cast<Eigen::Index>(k % 3)) = it->second;
+    (*cells)(static_cast<Eigen::Index>(k / N), static_cast<Eigen::Index>(k % N)) = it->second;
   }
-  s.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (std::size_t i = 0; i < pts.size(); ++i) s.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
+  vertices->resize(static_cast<Eigen::Index>(pts.size()), 3);
+  for (std::size_t i = 0; i < pts.size(); ++i) vertices->row(static_cast<Eigen::Index>(i)) = pts[i];
+}
+
+/// Read the current mesh's triangles (all surfaces) into a TriangleSurface scaled to metres.
+TriangleSurface extract_surface_triangles(double to_m) {
+  TriangleSurface s;
+  read_elements<3>(2, to_m, &s.vertices, &s.triangles);
   return s;
 }
 
@@ -124,28 +132,8 @@ TetMesh mesh_volume(double size, double to_m, const std::function<void()>& after
   set_mesh_options(size);
   gmsh::model::mesh::generate(3);
   if (after_generate) after_generate();
-  std::vector<std::size_t> elem_tags, node_tags;
-  gmsh::model::mesh::getElementsByType(4, elem_tags, node_tags);
-  std::vector<std::size_t> all_tags;
-  std::vector<double> coords, param;
-  gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
-  std::unordered_map<std::size_t, std::size_t> tag_to_coord;
-  for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
-
   TetMesh mesh;
-  std::unordered_map<std::size_t, int> index;
-  std::vector<Eigen::Vector3d> pts;
-  mesh.tets.resize(static_cast<Eigen::Index>(node_tags.size() / 4), 4);
-  for (std::size_t k = 0; k < node_tags.size(); ++k) {
-    auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(pts.size()));
-    if (inserted) {
-      const std::size_t c = tag_to_coord.at(node_tags[k]);
-      pts.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
-    }
-    mesh.tets(static_cast<Eigen::Index>(k / 4), static_cast<Eigen::Index>(k % 4)) = it->second;
-  }
-  mesh.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
-  for (std::size_t i = 0; i < pts.size(); ++i) mesh.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
+  read_elements<4>(4, to_m, &mesh.vertices, &mesh.tets);
   return mesh;
 }
 
