@@ -27,7 +27,8 @@ gmsh::vectorpair boundary_of(const gmsh::vectorpair& entities, bool combined) {
 
 }  // namespace
 
-CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, double to_m, double extend) {
+CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m,
+                                 double extend) {
   namespace occ = gmsh::model::occ;
   // One planar quad per panel (top segment swept along the depth direction), sharing the vertical
   // edges so the cut surface is conforming across the polyline's kinks. Loops run top_i -> top_{i+1}
@@ -50,13 +51,16 @@ CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, doub
   }
   gmsh::vectorpair out;
   std::vector<gmsh::vectorpair> out_map;
-  occ::fragment({{3, volume_tag}}, tools, out, out_map);
+  gmsh::vectorpair body;
+  for (int v : volume_tags) body.emplace_back(3, v);
+  occ::fragment(body, tools, out, out_map);
   occ::synchronize();
 
   // Keep the pieces below the surface line (inside the body); the extension above it is deleted.
+  // out_map lists the objects (the body volumes) first, then the tools (the panels).
   std::set<int> kept;
   gmsh::vectorpair outside;
-  for (std::size_t k = 1; k < out_map.size(); ++k)
+  for (std::size_t k = body.size(); k < out_map.size(); ++k)
     for (const auto& piece : out_map[k]) {
       if (piece.first != 2) continue;
       double x, y, z;
@@ -81,11 +85,14 @@ CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, doub
   // must split their nodes too. The other boundary curves (the crack front inside the body) stay shared.
   gmsh::vectorpair crack_surfaces;
   for (int s : kept) crack_surfaces.emplace_back(2, s);
+  // The outer surface is the combined boundary of all body volumes: faces shared by two pieces (imprinted
+  // region interfaces) cancel out, so the cut is not opened where it crosses one of them.
   gmsh::vectorpair volumes;
   gmsh::model::getEntities(volumes, 3);
+  std::set<int> outer_faces;
   gmsh::vectorpair outer;
-  for (const auto& s : boundary_of(volumes, false))
-    if (!kept.count(s.second)) outer.push_back(s);
+  for (const auto& s : boundary_of(volumes, true))
+    if (!kept.count(s.second) && outer_faces.insert(s.second).second) outer.push_back(s);
   std::set<int> outer_curves;
   for (const auto& c : boundary_of(outer, false)) outer_curves.insert(c.second);
   std::vector<int> open;
@@ -95,7 +102,7 @@ CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, doub
     std::vector<int> up, down;
     gmsh::model::getAdjacencies(1, c.second, up, down);
     bool on_outer = outer_curves.count(c.second) > 0;
-    for (int s : up) on_outer = on_outer || !kept.count(s);
+    for (int s : up) on_outer = on_outer || outer_faces.count(s) > 0;
     if (on_outer) open.push_back(c.second);
   }
   if (!open.empty()) e.open_boundary_group = gmsh::model::addPhysicalGroup(1, open, kOpenBoundaryGroup);
@@ -144,7 +151,7 @@ TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   const Eigen::Vector3d a = lo / to_m, ext = (hi - lo) / to_m;
   const int box = gmsh::model::occ::addBox(a.x(), a.y(), a.z(), ext.x(), ext.y(), ext.z());
   gmsh::model::occ::synchronize();
-  const CrackEmbedding embedding = embed_cut_in_volume(box, cut, to_m, extend);
+  const CrackEmbedding embedding = embed_cut_in_body({box}, cut, to_m, extend);
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Mesh.MeshSizeMax", size / to_m);
   gmsh::option::setNumber("Mesh.MeshSizeMin", size / to_m / 4);

@@ -4,6 +4,7 @@
 // deal.II then sees two free faces (FaceTag::crack) where the tissue is cut. Only the FEM mesh is
 // cracked; the meshless node cloud stays whole (the EFG model handles the cut by enrichment, eqs. 29–32).
 #include <Eigen/Core>
+#include <vector>
 
 #include "core/case.hpp"
 #include "core/ruled_surface.hpp"
@@ -19,10 +20,12 @@ struct CrackEmbedding {
   int num_surfaces = 0;
 };
 
-/// Fragment OCC volume `volume_tag` of the current model with the cut (model units = metres / to_m),
-/// extended `extend` [m] above its surface line so it pierces the surface cleanly; the parts outside the
-/// body are deleted. Throws std::runtime_error when the cut does not end up inside the volume.
-CrackEmbedding embed_cut_in_volume(int volume_tag, const RuledSurface& cut, double to_m, double extend);
+/// Fragment the body's OCC volumes (one, or several when regions were imprinted) of the current model with
+/// the cut (model units = metres / to_m), extended `extend` [m] above its surface line so it pierces the
+/// surface cleanly; the parts outside the body are deleted. Throws std::runtime_error when the cut does not
+/// end up inside the body.
+CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m,
+                                 double extend);
 
 /// Run after the volume mesh is generated: duplicate the nodes on the cut (Gmsh Crack plugin).
 void split_crack_nodes(const CrackEmbedding& embedding);

@@ -365,12 +365,11 @@ TriangleSurface reference_surface(const Case& c, double* reference_volume) {
   return surface;
 }
 
-/// Tetrahedra of the case's body at `size` [m].
 /// Imprint the fixed region (near_point) and the load patch on the built-in lung by fragmenting the body
 /// with the selector balls, so every mesh conforms to the region boundaries. The tagged fixed and loaded
 /// areas then do not change with the mesh size, which the FEM mesh-convergence study needs. The pieces of
-/// the balls outside the body are removed. Returns false when nothing could be imprinted.
-bool imprint_regions(const Case& c, int volume, const Eigen::Vector3d& load_centre) {
+/// the balls outside the body are removed. Returns the OCC volumes that now make up the body.
+std::vector<int> imprint_regions(const Case& c, int volume, const Eigen::Vector3d& load_centre) {
   gmsh::vectorpair tools;
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const Eigen::Vector3d p = c.fixed_region.point / 1e-3;
@@ -389,7 +388,7 @@ bool imprint_regions(const Case& c, int volume, const Eigen::Vector3d& load_cent
       outside.push_back(piece);
   gmsh::model::occ::remove(outside, /*recursive=*/true);
   gmsh::model::occ::synchronize();
-  return true;
+  return body;
 }
 
 /// A Gmsh Ball size field: `inside` within `radius` of `centre`, growing to `outside` over `thickness`.
@@ -427,13 +426,13 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   *conforming = false;
   if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
     gmsh::clear();
-    const int volume = add_builtin_lung();
-    // The crack embedding works on the single body volume, so regions are imprinted on uncut bodies only.
-    if (!cut) *conforming = imprint_regions(c, volume, load_centre);
+    const std::vector<int> body = imprint_regions(c, add_builtin_lung(), load_centre);
+    *conforming = true;
     refine_regions(c, load_centre, size / 1e-3);
-    // The FEM crack (core/crack_embedding.hpp): embed the cut, mesh, then duplicate its nodes.
+    // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
+    // its nodes.
     const std::optional<CrackEmbedding> crack =
-        cut ? std::optional(embed_cut_in_volume(volume, *cut, 1e-3, kCrackExtension)) : std::nullopt;
+        cut ? std::optional(embed_cut_in_body(body, *cut, 1e-3, kCrackExtension)) : std::nullopt;
     mesh = mesh_volume(size / 1e-3, 1e-3, [&] {
       if (crack) split_crack_nodes(*crack);
     });

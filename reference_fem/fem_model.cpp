@@ -43,6 +43,7 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   result.sample_displacements =
       result.sample_history.empty() ? Eigen::MatrixXd::Zero(sample_points.rows(), 3) : result.sample_history.back();
   result.vertex_displacements = vertex_displacements(solver.dof_handler(), solver.solution());
+  if (options.probe_radius > 0.0) result.probe_strain = solver.strain_in_ball(options.probe_centre, options.probe_radius);
   result.sections = solver.section_seconds();
   result.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -68,8 +69,13 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
 
   std::vector<double> times;  // the case's time steps t_n = n dt, n = 1..steps
   for (int n = 1; n <= c.time.steps; ++n) times.push_back(n * c.time.dt());
+  FemRunOptions run = options;
+  if (!(run.probe_radius > 0.0)) {
+    run.probe_centre = geometry.load_centre;
+    run.probe_radius = c.load.radius;
+  }
   FemRunResult result =
-      solve_on_mesh(geometry.fem_mesh, parameters, bc, times, geometry.sample_points, options, c.output.every);
+      solve_on_mesh(geometry.fem_mesh, parameters, bc, times, geometry.sample_points, run, c.output.every);
   result.load_area = area;
   for (const auto tag : geometry.fem_mesh.face_tags) result.crack_faces += tag == core::FaceTag::crack;
   return result;

@@ -19,6 +19,9 @@ struct FemRunOptions {
   double sample_tolerance = 3e-3;  ///< [m] how far a sample may lie outside the faceted mesh
   unsigned int threads = 2;
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
+  /// When radius > 0, measure the strain within this ball at the last step (FemRunResult::probe_strain).
+  Eigen::Vector3d probe_centre = Eigen::Vector3d::Zero();  ///< [m]
+  double probe_radius = 0.0;                               ///< [m]
 };
 
 struct FemRunResult {
@@ -34,6 +37,7 @@ struct FemRunResult {
   int crack_faces = 0;     ///< boundary faces tagged FaceTag::crack (both sides of the cut)
   std::vector<std::string> vtu_files;
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
+  BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
 };
 
 /// Solve on any tagged tet mesh (boundary ids = core::FaceTag values) with explicit conditions and
@@ -45,7 +49,8 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
                            int output_every = 1);
 
 /// Solve the case on geometry.fem_mesh: fixed faces clamped (strong Dirichlet), the load patch under a
-/// uniform traction force(t)/area ramped by LoadSpec::force_scale, time steps of TimeSpec.
+/// uniform traction force(t)/area ramped by LoadSpec::force_scale, time steps of TimeSpec. The strain is
+/// measured under the probe: within the load radius of the load centre (unless options say otherwise).
 FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const FemRunOptions& options = {});
 
 }  // namespace reference_fem

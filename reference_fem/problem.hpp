@@ -84,4 +84,12 @@ struct StepReport {
   double wall_seconds = 0.0;
 };
 
+/// Strain in a ball around a point (e.g. under the probe), from the converged quadrature-point history.
+/// The measure is the largest absolute principal strain, |eps|_max = max_i |lambda_i(eps)|.
+struct BallStrain {
+  double mean = 0.0;    ///< volume average of |eps|_max over the quadrature points in the ball
+  double peak = 0.0;    ///< largest |eps|_max at one quadrature point in the ball
+  double volume = 0.0;  ///< [m^3] the quadrature weight found in the ball (0: no point inside)
+};
+
 }  // namespace reference_fem

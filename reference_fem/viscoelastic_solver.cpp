@@ -1,5 +1,7 @@
 #include "reference_fem/viscoelastic_solver.hpp"
 
+#include "core/voigt.hpp"
+
 #include <deal.II/base/multithread_info.h>
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/work_stream.h>
@@ -15,6 +17,7 @@
 #include <deal.II/numerics/vector_tools.h>
 
 #include <Eigen/Core>
+#include <Eigen/Eigenvalues>
 #include <chrono>
 #include <algorithm>
 #include <cmath>
@@ -340,36 +343,54 @@ std::map<std::string, double> ViscoelasticSolver::section_seconds() const {
   return timer_.get_summary_data(TimerOutput::total_wall_time);
 }
 
-core::Vector6 ViscoelasticSolver::average_stress() const {
-  core::Vector6 sum = core::Vector6::Zero();
-  double volume = 0.0;
+void ViscoelasticSolver::for_each_quadrature_point(
+    const std::function<void(const Point<3>&, double, const PointHistory&)>& visit) const {
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
-  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values);
+  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values | update_quadrature_points);
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     fe_values.reinit(cell);
     const std::size_t first = cell->active_cell_index() * n_q_points_;
-    for (unsigned int q = 0; q < n_q_points_; ++q) {
-      sum += history_[first + q].state.stress * fe_values.JxW(q);
-      volume += fe_values.JxW(q);
-    }
+    for (unsigned int q = 0; q < n_q_points_; ++q)
+      visit(fe_values.quadrature_point(q), fe_values.JxW(q), history_[first + q]);
   }
+}
+
+core::Vector6 ViscoelasticSolver::average_stress() const {
+  core::Vector6 sum = core::Vector6::Zero();
+  double volume = 0.0;
+  for_each_quadrature_point([&](const Point<3>&, double jxw, const PointHistory& h) {
+    sum += h.state.stress * jxw;
+    volume += jxw;
+  });
   return sum / volume;
 }
 
 core::Vector6 ViscoelasticSolver::average_strain() const {
   core::Vector6 sum = core::Vector6::Zero();
   double volume = 0.0;
-  const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
-  FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values);
-  for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    fe_values.reinit(cell);
-    const std::size_t first = cell->active_cell_index() * n_q_points_;
-    for (unsigned int q = 0; q < n_q_points_; ++q) {
-      sum += history_[first + q].state.strain * fe_values.JxW(q);
-      volume += fe_values.JxW(q);
-    }
-  }
+  for_each_quadrature_point([&](const Point<3>&, double jxw, const PointHistory& h) {
+    sum += h.state.strain * jxw;
+    volume += jxw;
+  });
   return sum / volume;
+}
+
+BallStrain ViscoelasticSolver::strain_in_ball(const Eigen::Vector3d& centre, double radius) const {
+  BallStrain b;
+  double weighted = 0.0;
+  const Point<3> c(centre.x(), centre.y(), centre.z());
+  for_each_quadrature_point([&](const Point<3>& x, double jxw, const PointHistory& h) {
+    if (x.distance(c) > radius) return;
+    const Eigen::Vector3d principal =
+        Eigen::SelfAdjointEigenSolver<core::Matrix3>(core::voigt_to_strain(h.state.strain), Eigen::EigenvaluesOnly)
+            .eigenvalues();
+    const double magnitude = principal.cwiseAbs().maxCoeff();
+    weighted += magnitude * jxw;
+    b.volume += jxw;
+    b.peak = std::max(b.peak, magnitude);
+  });
+  if (b.volume > 0.0) b.mean = weighted / b.volume;
+  return b;
 }
 
 double ViscoelasticSolver::boundary_area(unsigned int id) const {

@@ -58,12 +58,18 @@ class ViscoelasticSolver {
   /// Volume averages of the converged stress (Voigt, tensor shears) and engineering strain at t_n.
   core::Vector6 average_stress() const;
   core::Vector6 average_strain() const;
+  /// The strain within `radius` [m] of `centre` (the material under the probe) at t_n.
+  BallStrain strain_in_ball(const Eigen::Vector3d& centre, double radius) const;
   /// Area of the faces with boundary id `id` [m^2] (on the straight-sided mesh).
   double boundary_area(unsigned int id) const;
 
  private:
   struct ScratchData;
   struct CopyData;
+
+  /// Visit every quadrature point's converged history with its position and weight JxW.
+  void for_each_quadrature_point(
+      const std::function<void(const dealii::Point<3>&, double, const PointHistory&)>& visit) const;
 
   /// Assemble the tangent (eq. 21 with E_k of eq. 13) and the residual R = F_ext - F_int at the current
   /// solution, with the history of t_n and the step dt. Returns the residual norm (free rows only).

@@ -144,6 +144,32 @@ TEST(BuiltinLung, CutIsSnappedToTheSurfaceAsARuledSurface) {
   EXPECT_NEAR(g.cut->distance(mid + 2e-3 * n), 2e-3, 1e-12);
 }
 
+TEST(BuiltinLung, CutBodyIsCrackedAndKeepsItsImprintedRegions) {
+  const core::Case c = core::load_case(kConfigDir + "/lung_large.json");
+  core::GeometryOptions options;
+  options.build_node_cloud = false;
+  const core::Geometry g = core::build_geometry(c, options);
+  ASSERT_TRUE(g.cut.has_value());
+  double crack_area = 0.0, load_area = 0.0;
+  for (int f = 0; f < g.fem_mesh.boundary_faces.rows(); ++f) {
+    const Eigen::Vector3d a = g.fem_mesh.vertices.row(g.fem_mesh.boundary_faces(f, 0));
+    const Eigen::Vector3d b = g.fem_mesh.vertices.row(g.fem_mesh.boundary_faces(f, 1));
+    const Eigen::Vector3d d = g.fem_mesh.vertices.row(g.fem_mesh.boundary_faces(f, 2));
+    const double area = 0.5 * (b - a).cross(d - a).norm();
+    if (g.fem_mesh.face_tags[f] == core::FaceTag::crack) crack_area += area;
+    if (g.fem_mesh.face_tags[f] == core::FaceTag::load) load_area += area;
+  }
+  std::cout << "crack faces " << crack_area * 1e6 << " mm^2 (cut " << g.cut->area() * 1e6 << " mm^2), load patch "
+            << load_area * 1e6 << " mm^2\n";
+  // Both faces of the cut are free boundary: twice the incision area, plus the sliver between the straight
+  // top segments and the curved surface line above them (the cut is extended until it pierces the surface).
+  EXPECT_NEAR(crack_area, 2.0 * g.cut->area(), 0.05 * 2.0 * g.cut->area());
+  // The regions are imprinted on the cut body too, so the load patch is the same disc as without a cut.
+  EXPECT_NEAR(load_area, M_PI * c.load.radius * c.load.radius, 0.06 * M_PI * c.load.radius * c.load.radius);
+  expect_closed_outward_boundary(g.fem_mesh);
+  EXPECT_NEAR(g.fem_mesh.volume(), g.reference_volume, 5e-3 * g.reference_volume);
+}
+
 TEST(RealLobe, TetVolumeMatchesStlEnclosedVolumeWithinOnePercent) {
   const std::string stl = std::string(TISSUE_SHARED_DATA_DIR) + "/lung/lower_lobe_of_left_lung_surface.stl";
   if (!std::filesystem::exists(stl)) GTEST_SKIP() << "real lung STL not found at " << stl << " (../shared absent)";
