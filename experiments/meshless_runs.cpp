@@ -49,7 +49,7 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                     {{"displacement", vector_field(model.nodal_displacements())}}, {});
     }
     r.steps.push_back({rec.step, rec.time, seconds_since(t0), rec.assembly_seconds, rec.solve_seconds,
-                       rec.newton_iterations, rec.residuals});
+                       rec.newton_iterations, rec.residuals, rec.linear_iterations});
     if (on_step)
       on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}{}", step, n_steps, rec.time,
                           rec.newton_iterations, rec.residuals.back(),
@@ -75,6 +75,8 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["variationally_consistent_integration"] = options.variationally_consistent;
   r.details["divergence_defect_before_vci"] = model.divergence_defect();
   r.details["linear_solver"] = st.linear_solver;
+  r.details["umfpack_peak_memory_estimate_bytes"] = st.direct_peak_memory_estimate;
+  r.details["umfpack_flops_estimate"] = st.direct_flops_estimate;
   r.details["nonlinear_solver"] = "full Newton, consistent tangent (core::KelvinLaw)";
   r.details["setup_seconds"] = t.setup_seconds;
   r.details["shape_function_seconds"] = t.shape_function_seconds;

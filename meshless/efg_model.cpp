@@ -12,6 +12,7 @@
 #include <exception>
 #include <stdexcept>
 
+#include "meshless/direct_solver_estimate.hpp"
 #include "meshless/mls_shape_functions.hpp"
 #include "meshless/node_search.hpp"
 #include "meshless/support_radii.hpp"
@@ -65,7 +66,7 @@ struct EfgModel::Factorisation {
   }
   bool analysed = false;
   Eigen::SparseMatrix<double, Eigen::ColMajor, int> colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
-  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
+  Eigen::BiCGSTAB<SparseMatrix, Eigen::IncompleteLUT<double, int>> bicgstab;
   bool valid = false;  // holds a factorisation (or preconditioner) of the current matrix_
 };
 
@@ -92,13 +93,16 @@ EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
 
 EfgModel::~EfgModel() = default;
 
-bool EfgModel::use_direct_solver() const {
+bool EfgModel::choose_direct_solver() {
   switch (options_.linear_solver) {
     case LinearSolverKind::direct: return true;
     case LinearSolverKind::iterative: return false;
     case LinearSolverKind::automatic: break;
   }
-  return 3 * problem_.mesh.num_vertices() <= options_.direct_solver_max_dofs;
+  const DirectSolverEstimate e = estimate_direct_solver(Eigen::SparseMatrix<double, Eigen::ColMajor, int>(matrix_));
+  stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
+  stats_.direct_flops_estimate = e.factorisation_flops;
+  return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();
 }
 
 void EfgModel::setup_system() {
@@ -176,8 +180,10 @@ void EfgModel::setup_system() {
   stats_.alpha = alpha_;
   stats_.penalised_area = boundary_.penalised_area;
   stats_.loaded_area = boundary_.loaded_area;
-  const char* direct = "UMFPACK (Eigen::UmfPackLU)";
-  stats_.linear_solver = use_direct_solver() ? direct : "BiCGSTAB (Jacobi preconditioner)";
+  const auto t_choice = std::chrono::steady_clock::now();
+  use_direct_ = choose_direct_solver();  // a symbolic LU analysis: part of the set-up cost
+  timings_.setup_seconds += seconds_since(t_choice);
+  stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (incomplete LU preconditioner, Eigen::IncompleteLUT)";
   set_up_ = true;
 }
 
@@ -302,10 +308,15 @@ void EfgModel::solve() {
     if (!f.valid) {
       f.bicgstab.setTolerance(options_.iterative_tolerance);
       f.bicgstab.setMaxIterations(options_.iterative_max_iterations);
+      f.bicgstab.preconditioner().setDroptol(options_.ilut_drop_tolerance);
+      f.bicgstab.preconditioner().setFillfactor(options_.ilut_fill_factor);
       f.bicgstab.compute(matrix_);
+      if (f.bicgstab.info() != Eigen::Success)
+        throw std::runtime_error(fmt::format("EfgModel '{}': the incomplete LU preconditioner failed", problem_.name));
       f.valid = true;
     }
     du = f.bicgstab.solve(-residual_);
+    last_linear_iterations_ = static_cast<int>(f.bicgstab.iterations());
     if (f.bicgstab.info() != Eigen::Success)
       throw std::runtime_error(fmt::format("EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g})",
                                            problem_.name, f.bicgstab.iterations(), f.bicgstab.error()));
@@ -359,6 +370,7 @@ StepRecord EfgModel::solve_step(int step) {
     t0 = std::chrono::steady_clock::now();
     solve();
     rec.solve_seconds += seconds_since(t0);
+    rec.linear_iterations += last_linear_iterations_;
     ++rec.newton_iterations;
   }
   // Commit the history (eqs. 15-16) at the converged strain of every point.

@@ -29,6 +29,7 @@ struct StepRecord {
   double dt = 0.0;          ///< [s]
   double load_scale = 0.0;  ///< load_scale(time)
   int newton_iterations = 0;               ///< linear solves
+  int linear_iterations = 0;               ///< BiCGSTAB iterations over the step (0 with the direct solver)
   std::vector<double> residuals;           ///< ||R|| / ||F_ext|| before each solve and after the last
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
@@ -53,6 +54,9 @@ struct EfgStatistics {
   double alpha = 0.0;                 ///< penalty parameter [Pa/m]
   double penalised_area = 0.0, loaded_area = 0.0;  ///< [m^2]
   std::string linear_solver;
+  /// UMFPACK's symbolic estimates for this matrix (automatic solver choice only; 0 when not estimated).
+  double direct_peak_memory_estimate = 0.0;  ///< [bytes]
+  double direct_flops_estimate = 0.0;
 };
 
 class EfgModel {
@@ -107,7 +111,9 @@ class EfgModel {
 
  private:
   void update_material(double dt);
-  bool use_direct_solver() const;
+  bool use_direct_solver() const { return use_direct_; }
+  /// Decide direct or iterative for the assembled pattern (setup_system); fills the estimates in stats_.
+  bool choose_direct_solver();
 
   EfgProblem problem_;
   EfgOptions options_;
@@ -134,6 +140,8 @@ class EfgModel {
   std::unique_ptr<Factorisation> factorisation_;
   double current_dt_ = 0.0;
   double factorised_dt_ = -1.0;
+  bool use_direct_ = true;
+  int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
   std::vector<StepRecord> records_;

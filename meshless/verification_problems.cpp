@@ -240,4 +240,26 @@ CreepReport run_creep_bar(int steps) {
   return r;
 }
 
+EfgProblem sheared_box_problem(int points_per_side, double spacing) {
+  const int cells = points_per_side - 1;
+  const double edge = cells * spacing;
+  auto tagger = [edge](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
+    if (c.z() < 1e-12) return core::FaceTag::fixed;
+    if (c.z() > edge - 1e-12) return core::FaceTag::load;
+    return core::FaceTag::free_surface;
+  };
+  EfgProblem p;
+  p.name = "sheared box";
+  p.mesh = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(edge), cells, cells, cells, tagger, 0.2, 3);
+  p.material = {6000.0, 12000.0, 18000.0, 0.4, 0.0};
+  p.support.d_max = 2.0;
+  p.support.k = 6;
+  p.quadrature_order = 2;
+  p.node_spacing = spacing;
+  p.penalty_factor = 1e3;
+  p.traction = [](const Eigen::Vector3d&) { return Eigen::Vector3d(10.0, 0.0, 0.0); };
+  p.step_times = {0.0};
+  return p;
+}
+
 }  // namespace meshless

@@ -46,6 +46,12 @@ struct CantileverReport {
 /// parabolic shear P at x = L; K1 = 6000 Pa, nu = 0, elastic step (k = 0, dt = 0).
 CantileverReport run_cantilever(int cells_through_height, int quadrature_order = 3, bool variationally_consistent = true);
 
+/// The scaling problem of the benchmarks and the linear-solver tests: a cube of `points_per_side`^3 nodes at
+/// `spacing` [m] (cells jittered by 0.2, 6 tets per cell), clamped by penalty on z = 0 and sheared by a 10 Pa
+/// traction along x on the top face; lung-like material (K1 6 kPa, K2 12 kPa, eta 18 kPa s, nu 0.4, k = 0),
+/// d_max = 2, k = 6, quadrature order 2, one elastic step.
+EfgProblem sheared_box_problem(int points_per_side, double spacing = 0.005);
+
 /// Least-squares slope of log(error) against log(h).
 double convergence_rate(const std::vector<double>& h, const std::vector<double>& error);
 

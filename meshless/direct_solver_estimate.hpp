@@ -1,0 +1,24 @@
+#pragma once
+// Will a sparse LU of this matrix fit in memory? UMFPACK's symbolic analysis (column ordering and
+// elimination tree, no numerical work) predicts the peak memory, the size of the LU factors and the
+// flop count of the factorisation. The EFG model uses it to choose between the direct solver and the
+// iterative fallback from the actual sparsity pattern, rather than from a fixed DOF threshold: EFG rows
+// hold hundreds of entries, so the fill-in depends on the support size as much as on the node count.
+#include <Eigen/SparseCore>
+
+namespace meshless {
+
+struct DirectSolverEstimate {
+  double peak_memory_bytes = 0.0;   ///< UMFPACK_PEAK_MEMORY_ESTIMATE (symbolic + numeric, upper bound)
+  double factor_bytes = 0.0;        ///< UMFPACK_NUMERIC_SIZE_ESTIMATE: the L and U factors
+  double factorisation_flops = 0.0; ///< UMFPACK_FLOPS_ESTIMATE
+};
+
+/// Symbolic analysis of `pattern` (values ignored) with UMFPACK's default controls, the same ones
+/// Eigen::UmfPackLU uses. Throws std::runtime_error when UMFPACK rejects the pattern.
+DirectSolverEstimate estimate_direct_solver(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern);
+
+/// Physical memory of this machine [bytes] (sysconf), the budget the estimate is compared with.
+double physical_memory_bytes();
+
+}  // namespace meshless

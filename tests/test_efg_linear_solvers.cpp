@@ -1,0 +1,59 @@
+// EFG linear solvers: the automatic direct/iterative choice from UMFPACK's symbolic estimate, and the
+// iterative fallback (Jacobi-BiCGSTAB) reaching the same equilibrium as the sparse LU.
+#include <gtest/gtest.h>
+
+#include <iostream>
+
+#include "meshless/direct_solver_estimate.hpp"
+#include "meshless/efg_model.hpp"
+#include "meshless/verification_problems.hpp"
+
+namespace meshless {
+namespace {
+
+Eigen::VectorXd solve_sheared_box(int side, LinearSolverKind solver, EfgStatistics* stats = nullptr) {
+  EfgOptions options;
+  options.linear_solver = solver;
+  EfgModel model(sheared_box_problem(side), options);
+  model.setup_system();
+  const StepRecord r = model.solve_step(1);
+  EXPECT_LE(r.residuals.back(), 1e-8);  // solve_step throws when Newton fails
+  if (stats) *stats = model.statistics();
+  return model.nodal_parameters();
+}
+
+TEST(EfgLinearSolvers, AutomaticChoiceFactorisesSmallCloudsAndReportsTheEstimate) {
+  EfgStatistics small, larger;
+  solve_sheared_box(5, LinearSolverKind::automatic, &small);
+  solve_sheared_box(8, LinearSolverKind::automatic, &larger);
+  std::cout << "UMFPACK estimates: 5^3 nodes " << small.direct_peak_memory_estimate / 1e6 << " MB, "
+            << small.direct_flops_estimate / 1e6 << " Mflop; 8^3 nodes " << larger.direct_peak_memory_estimate / 1e6
+            << " MB, " << larger.direct_flops_estimate / 1e6 << " Mflop\n";
+  EXPECT_EQ(small.linear_solver.rfind("UMFPACK", 0), 0u);
+  // The peak memory is at least the matrix (8-byte values + 4-byte indices) and grows with the cloud.
+  EXPECT_GT(small.direct_peak_memory_estimate, 12.0 * small.matrix_nonzeros);
+  EXPECT_GT(larger.direct_peak_memory_estimate, small.direct_peak_memory_estimate);
+  EXPECT_GT(larger.direct_flops_estimate, small.direct_flops_estimate);
+  EXPECT_GT(physical_memory_bytes(), 1e8);
+}
+
+TEST(EfgLinearSolvers, IterativeFallbackReachesTheDirectSolution) {
+  EfgStatistics iterative_stats;
+  const Eigen::VectorXd direct = solve_sheared_box(6, LinearSolverKind::direct);
+  const Eigen::VectorXd iterative = solve_sheared_box(6, LinearSolverKind::iterative, &iterative_stats);
+  const double difference = (iterative - direct).norm() / direct.norm();
+  std::cout << "6^3 sheared box: |U| = " << direct.norm() * 1e3 << " mm, BiCGSTAB vs UMFPACK relative difference "
+            << difference << "\n";
+  EXPECT_EQ(iterative_stats.linear_solver.rfind("BiCGSTAB", 0), 0u);
+  EXPECT_GT(direct.norm(), 0.0);
+  EXPECT_LT(difference, 1e-6);
+}
+
+TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
+  Eigen::SparseMatrix<double, Eigen::ColMajor, int> a(3, 3);
+  a.insert(0, 0) = 1.0;  // insert leaves the matrix uncompressed
+  EXPECT_THROW(estimate_direct_solver(a), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace meshless
