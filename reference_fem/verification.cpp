@@ -88,6 +88,7 @@ UniaxialResult run_uniaxial(const UniaxialOptions& o, const BoundaryConditions& 
     result.max_newton_iterations = std::max(result.max_newton_iterations, report.newton_iterations);
     result.history.push_back(s);
   });
+  result.final_ball_strain = solver.strain_in_ball(Eigen::Vector3d(1.0, 0.5, 0.5), 0.4);
   return result;
 }
 

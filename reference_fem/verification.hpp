@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "core/kelvin_law.hpp"
+#include "reference_fem/problem.hpp"
 
 namespace reference_fem {
 
@@ -27,6 +28,8 @@ struct UniaxialResult {
   std::vector<UniaxialSample> history;
   double max_relative_error = 0.0;
   int max_newton_iterations = 0;
+  /// strain_in_ball over a ball of radius 0.4 in the middle of the bar at the last step (a uniform field).
+  BallStrain final_ball_strain;
 };
 
 /// Step strain eps0 held: sigma(t) = eps0 K1/(K1+K2) [K2 + K1 exp(-t/tau)], tau = eta/(K1+K2).

@@ -49,6 +49,14 @@ TEST(FemUniaxial, CreepMatchesClosedForm) {
   std::cout << "creep: max relative error " << r.max_relative_error << "\n";
   EXPECT_LT(r.max_relative_error, 5e-3);
   EXPECT_GT(r.history.back().computed, 2.9 * r.history.front().computed);  // creeps to sigma0 (1/K1 + 1/K2)
+  // With nu = 0 the strain is diag(eps_xx, 0, 0) everywhere, so the probe measure (largest |principal strain|)
+  // is eps_xx at every point of the ball: mean = peak = the closed form.
+  const double eps = r.history.back().exact;
+  std::cout << "ball strain: mean " << r.final_ball_strain.mean << ", peak " << r.final_ball_strain.peak
+            << ", exact " << eps << "\n";
+  EXPECT_GT(r.final_ball_strain.volume, 0.0);
+  EXPECT_NEAR(r.final_ball_strain.mean, eps, 5e-3 * eps);
+  EXPECT_NEAR(r.final_ball_strain.peak, eps, 5e-3 * eps);
 }
 
 TEST(FemCantilever, L2ErrorConvergesAtRateThreeForDegreeTwo) {
