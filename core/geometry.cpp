@@ -16,6 +16,7 @@
 
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_session.hpp"
+#include "core/stl_solid.hpp"
 
 namespace core {
 namespace {
@@ -184,27 +185,23 @@ bool in_fixed_region(const FixedRegionSpec& r, const Eigen::Vector3d& x) {
   return std::abs((x - r.point).dot(r.normal)) <= r.distance + kRegionTolerance;
 }
 
-/// Tag fixed and load faces; errors name the case file and the JSON path of the selector.
-/// `conforming`: the mesh conforms to the imprinted load circle, so a face is in the patch exactly when all
-/// its vertices are; otherwise the face centroid decides (the patch edge is then ragged at the mesh scale).
+/// Tag fixed and load faces; errors name the case file and the JSON path of the selector. The mesh conforms to
+/// the imprinted load circle (and fixed ball), so a face is in a region exactly when its three vertices are.
 void tag_regions(const Case& c, const Eigen::Vector3d& load_centre, const Eigen::Vector3d& load_normal,
-                 const char* which, bool conforming, TetMesh* mesh) {
+                 const char* which, TetMesh* mesh) {
   int n_fixed = 0, n_load = 0, n_overlap = 0;
   for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
     bool all_fixed = true, all_loaded = true;
-    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
     for (int k = 0; k < 3; ++k) {
       const Eigen::Vector3d x = mesh->vertices.row(mesh->boundary_faces(f, k));
       all_fixed = all_fixed && in_fixed_region(c.fixed_region, x);
       all_loaded = all_loaded && (x - load_centre).norm() <= c.load.radius + kRegionTolerance;
-      centroid += x / 3.0;
     }
     const Eigen::Vector3d a = mesh->vertices.row(mesh->boundary_faces(f, 0));
     const Eigen::Vector3d b = mesh->vertices.row(mesh->boundary_faces(f, 1));
     const Eigen::Vector3d cc = mesh->vertices.row(mesh->boundary_faces(f, 2));
     const Eigen::Vector3d normal = (b - a).cross(cc - a).normalized();
-    const bool near = conforming ? all_loaded : (centroid - load_centre).norm() <= c.load.radius;
-    const bool in_load = near && normal.dot(load_normal) > 0.0;
+    const bool in_load = all_loaded && normal.dot(load_normal) > 0.0;
     if (all_fixed) {
       mesh->face_tags[f] = FaceTag::fixed;
       for (int k = 0; k < 3; ++k) mesh->vertex_fixed[mesh->boundary_faces(f, k)] = 1;
@@ -249,43 +246,6 @@ PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spe
   return samples;
 }
 
-/// Split every triangle into four (edge midpoints) until no edge is longer than `size`. The STL is the
-/// exact, piecewise-flat surface, so subdivision refines the boundary without changing the geometry.
-TriangleSurface subdivide(TriangleSurface s, double size) {
-  auto longest_edge = [](const TriangleSurface& t) {
-    double longest = 0.0;
-    for (int f = 0; f < t.triangles.rows(); ++f)
-      for (int e = 0; e < 3; ++e)
-        longest = std::max(longest, (t.vertices.row(t.triangles(f, e)) - t.vertices.row(t.triangles(f, (e + 1) % 3))).norm());
-    return longest;
-  };
-  while (longest_edge(s) > size) {
-    std::map<std::pair<int, int>, int> midpoint;
-    std::vector<Eigen::Vector3d> pts;
-    for (int i = 0; i < s.vertices.rows(); ++i) pts.emplace_back(s.vertices.row(i));
-    auto mid = [&](int i, int j) {
-      const std::pair<int, int> key{std::min(i, j), std::max(i, j)};
-      auto it = midpoint.find(key);
-      if (it != midpoint.end()) return it->second;
-      pts.push_back(0.5 * (pts[i] + pts[j]));
-      return midpoint[key] = static_cast<int>(pts.size()) - 1;
-    };
-    TriMatrix tris(4 * s.triangles.rows(), 3);
-    for (int f = 0; f < s.triangles.rows(); ++f) {
-      const int a = s.triangles(f, 0), b = s.triangles(f, 1), c = s.triangles(f, 2);
-      const int ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-      tris.row(4 * f) << a, ab, ca;
-      tris.row(4 * f + 1) << ab, b, bc;
-      tris.row(4 * f + 2) << ca, bc, c;
-      tris.row(4 * f + 3) << ab, bc, ca;
-    }
-    s.triangles = tris;
-    s.vertices.resize(static_cast<Eigen::Index>(pts.size()), 3);
-    for (std::size_t i = 0; i < pts.size(); ++i) s.vertices.row(static_cast<Eigen::Index>(i)) = pts[i];
-  }
-  return s;
-}
-
 /// Read, check and orient the STL surface (metres). Errors point at /geometry/stl_file.
 TriangleSurface load_stl_surface(const Case& c) {
   const std::string& file = c.geometry.stl_file;
@@ -309,40 +269,6 @@ TriangleSurface load_stl_surface(const Case& c) {
                                 file, open_edges));
   orient_outward(&surface);
   return surface;
-}
-
-/// The paper's CT -> STL pipeline: hand the (subdivided) STL triangulation to Gmsh as a discrete surface,
-/// classify it into patches without reparametrisation (the triangles are kept exactly), close it with a
-/// surface loop and fill it with a volume. Model units are metres.
-///
-/// Why not remesh the surface: in Gmsh 4.8, reparametrised remeshing of classified STL patches can fail
-/// inside an OpenMP region ("Unable to recover the edge"), which terminates the process.
-void add_stl_volume(const TriangleSurface& surface, double size) {
-  gmsh::clear();
-  const TriangleSurface fine = subdivide(surface, size);
-  const int tag = gmsh::model::addDiscreteEntity(2);
-  std::vector<std::size_t> node_tags(static_cast<std::size_t>(fine.vertices.rows()));
-  std::vector<double> coords;
-  for (Eigen::Index i = 0; i < fine.vertices.rows(); ++i) {
-    node_tags[static_cast<std::size_t>(i)] = static_cast<std::size_t>(i + 1);
-    for (int k = 0; k < 3; ++k) coords.push_back(fine.vertices(i, k));
-  }
-  gmsh::model::mesh::addNodes(2, tag, node_tags, coords);
-  std::vector<std::size_t> element_tags, element_nodes;
-  for (Eigen::Index f = 0; f < fine.triangles.rows(); ++f) {
-    element_tags.push_back(static_cast<std::size_t>(f + 1));
-    for (int k = 0; k < 3; ++k) element_nodes.push_back(static_cast<std::size_t>(fine.triangles(f, k) + 1));
-  }
-  gmsh::model::mesh::addElementsByType(tag, 2, element_tags, element_nodes);
-  gmsh::model::mesh::classifySurfaces(40.0 * M_PI / 180.0, true, false, M_PI);
-  gmsh::model::mesh::createGeometry();
-  gmsh::vectorpair surfaces;
-  gmsh::model::getEntities(surfaces, 2);
-  std::vector<int> tags;
-  for (const auto& s : surfaces) tags.push_back(s.second);
-  const int loop = gmsh::model::geo::addSurfaceLoop(tags);
-  gmsh::model::geo::addVolume({loop});
-  gmsh::model::geo::synchronize();
 }
 
 /// Reference surface and volume for the case (the Gmsh model is left empty for STL input).
@@ -420,29 +346,33 @@ void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double si
   gmsh::model::mesh::field::setAsBackgroundMesh(min_field);
 }
 
+/// Tetrahedra of the case's body at `size` [m]. Both geometry sources become OpenCASCADE solids in mm
+/// (the built-in lung, or the STL's triangles as planar faces), so both get the same treatment: the regions
+/// are imprinted, the mesh is refined around them, and a cut is embedded and cracked (FEM mesh only).
 TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const Eigen::Vector3d& load_centre,
-                  bool* conforming, const RuledSurface* cut = nullptr) {
+                  const RuledSurface* cut = nullptr) {
+  constexpr double to_m = 1e-3;  // model units: mm
+  gmsh::clear();
+  const int solid = c.geometry.source == GeometrySpec::Source::builtin_lung ? add_builtin_lung()
+                                                                             : add_stl_solid(surface, to_m);
+  const std::vector<int> body = imprint_regions(c, solid, load_centre);
+  refine_regions(c, load_centre, size / to_m);
+  // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
+  // its nodes.
+  const std::optional<CrackEmbedding> crack =
+      cut ? std::optional(embed_cut_in_body(body, *cut, to_m, kCrackExtension)) : std::nullopt;
   TetMesh mesh;
-  *conforming = false;
-  if (c.geometry.source == GeometrySpec::Source::builtin_lung) {
-    gmsh::clear();
-    const std::vector<int> body = imprint_regions(c, add_builtin_lung(), load_centre);
-    *conforming = true;
-    refine_regions(c, load_centre, size / 1e-3);
-    // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
-    // its nodes.
-    const std::optional<CrackEmbedding> crack =
-        cut ? std::optional(embed_cut_in_body(body, *cut, 1e-3, kCrackExtension)) : std::nullopt;
-    mesh = mesh_volume(size / 1e-3, 1e-3, [&] {
+  try {
+    mesh = mesh_volume(size / to_m, to_m, [&] {
       if (crack) split_crack_nodes(*crack);
     });
-  } else {
+  } catch (const std::string& gmsh_error) {  // the Gmsh SDK throws its last error as a string
+    const std::string what = fmt::format("Gmsh could not mesh the body at {:.3g} mm: {}", size * 1e3, gmsh_error);
     if (cut)
       throw CaseError(c.source_file, "/cut",
-                      "cuts are supported for the built-in lung only (the FEM crack in an STL body is not "
-                      "implemented yet); expected no cut with an STL geometry");
-    add_stl_volume(surface, size);
-    mesh = mesh_volume(size, 1.0);
+                      what + "; expected an incision that crosses the surface at a clear angle (try another direction "
+                             "or depth)");
+    throw std::runtime_error(what);
   }
   finish_topology(&mesh);
   return mesh;
@@ -514,16 +444,13 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
-    bool conforming = false;
-    g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, &conforming,
-                           g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
-    tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", conforming, &g.fem_mesh);
+    g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
+    tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
     if (g.cut) tag_crack_faces(*g.cut, kCrackExtension, &g.fem_mesh);
   }
   if (options.build_node_cloud) {
-    bool conforming = false;
-    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre, &conforming);
-    tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", conforming, &g.meshless_mesh);
+    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);
+    tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
   }
   return g;
 }

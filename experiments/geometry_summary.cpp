@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+
 #include <numeric>
 
 namespace experiments {
@@ -45,7 +47,11 @@ nlohmann::json summarize_geometry(const core::Case& c, const core::Geometry& g) 
     samples.push_back({g.sample_points(i, 0) * 1e3, g.sample_points(i, 1) * 1e3, g.sample_points(i, 2) * 1e3});
   s["sample_points_mm"] = samples;
   if (g.cut) {
-    s["cut"] = {{"panels", g.cut->num_panels()}, {"area_mm2", g.cut->area() * 1e6}, {"depth_mm", g.cut->depth() * 1e3}};
+    s["cut"] = {{"panels", g.cut->num_panels()},
+                {"area_mm2", g.cut->area() * 1e6},
+                {"depth_mm", g.cut->depth() * 1e3},
+                {"fem_crack_faces", std::count(g.fem_mesh.face_tags.begin(), g.fem_mesh.face_tags.end(), core::FaceTag::crack)},
+                {"fem_crack_area_mm2", g.fem_mesh.tagged_area(core::FaceTag::crack) * 1e6}};
   }
   return s;
 }
@@ -76,8 +82,11 @@ std::string format_geometry_summary(const nlohmann::json& s) {
     out += fmt::format("  {:>3}  ({:8.2f}, {:8.2f}, {:8.2f}) mm\n", i++, p[0].get<double>(), p[1].get<double>(),
                        p[2].get<double>());
   if (s.contains("cut"))
-    out += fmt::format("cut             {} panels, depth {:.1f} mm, area {:.1f} mm^2\n", s["cut"]["panels"].get<int>(),
-                       s["cut"]["depth_mm"].get<double>(), s["cut"]["area_mm2"].get<double>());
+    out += fmt::format("cut             {} panels, depth {:.1f} mm, area {:.1f} mm^2; FEM crack: {} faces, {:.1f} mm^2 "
+                       "(both lips)\n",
+                       s["cut"]["panels"].get<int>(), s["cut"]["depth_mm"].get<double>(),
+                       s["cut"]["area_mm2"].get<double>(), s["cut"]["fem_crack_faces"].get<int>(),
+                       s["cut"]["fem_crack_area_mm2"].get<double>());
   return out;
 }
 
