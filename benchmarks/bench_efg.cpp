@@ -6,13 +6,22 @@
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
 
-#include <map>
+#include <sys/resource.h>
+
 #include <memory>
 
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
 namespace {
+
+/// Peak resident memory of this process so far [GB]. The sizes run in increasing order, so after a 32k
+/// benchmark this is the peak of the 32k model (set-up, assembly and, for the solve, the factorisation).
+double peak_memory_gb() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) * 1024.0 / 1e9;  // ru_maxrss is in KiB on Linux
+}
 
 /// One set-up model per size and solver, shared by the benchmarks (set-up of the 32k cloud takes tens of
 /// seconds). Only one is kept alive at a time: the 32k model alone holds several GB.
@@ -46,6 +55,7 @@ void BM_EfgAssembly(benchmark::State& state) {
   state.counters["nodes"] = model.statistics().num_nodes;
   state.counters["nnz"] = static_cast<double>(model.statistics().matrix_nonzeros);
   state.counters["nodes_per_point"] = model.statistics().mean_nodes_per_point;
+  state.counters["peak_rss_GB"] = peak_memory_gb();
 }
 
 void time_solve(benchmark::State& state, meshless::LinearSolverKind solver) {
@@ -60,6 +70,8 @@ void time_solve(benchmark::State& state, meshless::LinearSolverKind solver) {
   state.counters["nodes"] = st.num_nodes;
   state.counters["umfpack_peak_GB"] = st.direct_peak_memory_estimate / 1e9;
   state.counters["umfpack_Gflop"] = st.direct_flops_estimate / 1e9;
+  state.counters["peak_rss_GB"] = peak_memory_gb();
+  state.counters["bicgstab_iterations"] = model.last_linear_iterations();
   state.SetLabel(st.linear_solver);
 }
 
