@@ -3,13 +3,11 @@
 #include <gmsh.h>
 
 #include <algorithm>
-#include <array>
-#include <map>
 #include <set>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
+#include "core/gmsh_mesh.hpp"
 #include "core/gmsh_session.hpp"
 
 namespace core {
@@ -160,51 +158,7 @@ TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   gmsh::model::mesh::generate(3);
   split_crack_nodes(embedding);
 
-  // Linear tets in metres (same extraction as core/geometry.cpp).
-  std::vector<std::size_t> elem_tags, node_tags, all_tags;
-  std::vector<double> coords, param;
-  gmsh::model::mesh::getElementsByType(4, elem_tags, node_tags);
-  gmsh::model::mesh::getNodes(all_tags, coords, param, -1, -1, true, false);
-  std::unordered_map<std::size_t, std::size_t> tag_to_coord;
-  for (std::size_t i = 0; i < all_tags.size(); ++i) tag_to_coord[all_tags[i]] = i;
-  std::unordered_map<std::size_t, int> index;
-  std::vector<Eigen::Vector3d> points;
-  TetMesh mesh;
-  mesh.tets.resize(static_cast<Eigen::Index>(node_tags.size() / 4), 4);
-  for (std::size_t k = 0; k < node_tags.size(); ++k) {
-    auto [it, inserted] = index.emplace(node_tags[k], static_cast<int>(points.size()));
-    if (inserted) {
-      const std::size_t c = tag_to_coord.at(node_tags[k]);
-      points.emplace_back(coords[3 * c] * to_m, coords[3 * c + 1] * to_m, coords[3 * c + 2] * to_m);
-    }
-    mesh.tets(static_cast<Eigen::Index>(k / 4), static_cast<Eigen::Index>(k % 4)) = it->second;
-  }
-  mesh.vertices.resize(static_cast<Eigen::Index>(points.size()), 3);
-  for (std::size_t i = 0; i < points.size(); ++i) mesh.vertices.row(static_cast<Eigen::Index>(i)) = points[i];
-
-  // Positive tets; boundary = faces used once (the two sides of the cut now have distinct nodes).
-  for (int t = 0; t < mesh.num_tets(); ++t)
-    if (tet_volume(mesh.vertices.row(mesh.tets(t, 0)), mesh.vertices.row(mesh.tets(t, 1)),
-                   mesh.vertices.row(mesh.tets(t, 2)), mesh.vertices.row(mesh.tets(t, 3))) < 0)
-      std::swap(mesh.tets(t, 2), mesh.tets(t, 3));
-  static const int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-  std::map<std::array<int, 3>, std::pair<std::array<int, 3>, int>> faces;
-  for (int t = 0; t < mesh.num_tets(); ++t)
-    for (const auto& f : kFace) {
-      std::array<int, 3> oriented{mesh.tets(t, f[0]), mesh.tets(t, f[1]), mesh.tets(t, f[2])};
-      std::array<int, 3> key = oriented;
-      std::sort(key.begin(), key.end());
-      auto [it, inserted] = faces.emplace(key, std::make_pair(oriented, 1));
-      if (!inserted) ++it->second.second;
-    }
-  std::vector<std::array<int, 3>> boundary;
-  for (const auto& [key, value] : faces)
-    if (value.second == 1) boundary.push_back(value.first);
-  mesh.boundary_faces.resize(static_cast<Eigen::Index>(boundary.size()), 3);
-  for (std::size_t f = 0; f < boundary.size(); ++f)
-    for (int k = 0; k < 3; ++k) mesh.boundary_faces(static_cast<Eigen::Index>(f), k) = boundary[f][k];
-  mesh.face_tags.assign(boundary.size(), FaceTag::free_surface);
-  mesh.vertex_fixed.assign(mesh.num_vertices(), 0);
+  TetMesh mesh = read_gmsh_tets(to_m);  // both lips of the cut are boundary faces now
   tag_crack_faces(cut, extend, &mesh);
   return mesh;
 }
