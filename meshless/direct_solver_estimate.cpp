@@ -5,19 +5,23 @@
 #include <unistd.h>
 
 #include <stdexcept>
+#include <type_traits>
 
 namespace meshless {
 
-DirectSolverEstimate estimate_direct_solver(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern) {
+static_assert(std::is_same_v<SuiteSparse_long, UmfpackMatrix::StorageIndex>,
+              "UmfpackMatrix must use SuiteSparse_long indices so that Eigen calls UMFPACK's dl routines");
+
+DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern) {
   if (!pattern.isCompressed()) throw std::invalid_argument("estimate_direct_solver: the matrix must be compressed");
   double control[UMFPACK_CONTROL], info[UMFPACK_INFO];
-  umfpack_di_defaults(control);
+  umfpack_dl_defaults(control);
   void* symbolic = nullptr;
   // Ax may be null: the symbolic analysis then orders by the pattern alone.
-  const int status = umfpack_di_symbolic(static_cast<int>(pattern.rows()), static_cast<int>(pattern.cols()),
-                                         pattern.outerIndexPtr(), pattern.innerIndexPtr(), nullptr, &symbolic,
-                                         control, info);
-  if (symbolic) umfpack_di_free_symbolic(&symbolic);
+  const SuiteSparse_long status =
+      umfpack_dl_symbolic(pattern.rows(), pattern.cols(), pattern.outerIndexPtr(), pattern.innerIndexPtr(), nullptr,
+                          &symbolic, control, info);
+  if (symbolic) umfpack_dl_free_symbolic(&symbolic);
   if (status != UMFPACK_OK)
     throw std::runtime_error(fmt::format("UMFPACK symbolic analysis failed (status {})", status));
   const double unit = info[UMFPACK_SIZE_OF_UNIT];

@@ -8,6 +8,11 @@
 
 namespace meshless {
 
+/// The matrix type handed to UMFPACK: 64-bit indices select its "dl" routines. The "di" (int) routines fail
+/// with "out of memory" on EFG systems of about 8k nodes (6 GB of factors), far below the machine's RAM.
+/// (`long` is SuiteSparse_long on Linux; the .cpp checks it.)
+using UmfpackMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, long>;
+
 struct DirectSolverEstimate {
   double peak_memory_bytes = 0.0;   ///< UMFPACK_PEAK_MEMORY_ESTIMATE (symbolic + numeric, upper bound)
   double factor_bytes = 0.0;        ///< UMFPACK_NUMERIC_SIZE_ESTIMATE: the L and U factors
@@ -16,7 +21,7 @@ struct DirectSolverEstimate {
 
 /// Symbolic analysis of `pattern` (values ignored) with UMFPACK's default controls, the same ones
 /// Eigen::UmfPackLU uses. Throws std::runtime_error when UMFPACK rejects the pattern.
-DirectSolverEstimate estimate_direct_solver(const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& pattern);
+DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern);
 
 /// Physical memory of this machine [bytes] (sysconf), the budget the estimate is compared with.
 double physical_memory_bytes();

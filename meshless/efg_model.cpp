@@ -60,13 +60,24 @@ void parallel_for(int n, int chunk, const Body& body) {
 struct EfgModel::Factorisation {
   // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
   // row), where Eigen's SparseLU is an order of magnitude slower.
-  Eigen::UmfPackLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>> lu;
-  static std::string last_error(const Eigen::UmfPackLU<Eigen::SparseMatrix<double, Eigen::ColMajor, int>>& lu) {
-    return lu.info() == Eigen::NumericalIssue ? "numerically singular matrix" : "UMFPACK error";
+  Eigen::UmfPackLU<UmfpackMatrix> lu;
+  /// umfpack_numeric's status. Eigen::UmfPackLU reports every non-zero status as NumericalIssue, but the
+  /// determinant under/overflow warnings come with a valid factorisation (UMFPACK user guide), so only the
+  /// singular-matrix warning and the errors are failures; the message names which one it was.
+  static bool factorised(long status) {
+    return status == UMFPACK_OK || status == UMFPACK_WARNING_determinant_underflow ||
+           status == UMFPACK_WARNING_determinant_overflow;
+  }
+  static std::string describe(long status) {
+    switch (status) {
+      case UMFPACK_WARNING_singular_matrix: return "numerically singular matrix";
+      case UMFPACK_ERROR_out_of_memory: return "UMFPACK ran out of memory";
+      default: return fmt::format("UMFPACK status {}", status);
+    }
   }
   bool analysed = false;
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
-  Eigen::BiCGSTAB<SparseMatrix, Eigen::IncompleteLUT<double, int>> bicgstab;
+  UmfpackMatrix colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
+  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
   bool valid = false;  // holds a factorisation (or preconditioner) of the current matrix_
 };
 
@@ -99,7 +110,7 @@ bool EfgModel::choose_direct_solver() {
     case LinearSolverKind::iterative: return false;
     case LinearSolverKind::automatic: break;
   }
-  const DirectSolverEstimate e = estimate_direct_solver(Eigen::SparseMatrix<double, Eigen::ColMajor, int>(matrix_));
+  const DirectSolverEstimate e = estimate_direct_solver(UmfpackMatrix(matrix_));
   stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
   stats_.direct_flops_estimate = e.factorisation_flops;
   return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();
@@ -183,7 +194,7 @@ void EfgModel::setup_system() {
   const auto t_choice = std::chrono::steady_clock::now();
   use_direct_ = choose_direct_solver();  // a symbolic LU analysis: part of the set-up cost
   timings_.setup_seconds += seconds_since(t_choice);
-  stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (incomplete LU preconditioner, Eigen::IncompleteLUT)";
+  stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (Jacobi preconditioner)";
   set_up_ = true;
 }
 
@@ -291,15 +302,19 @@ void EfgModel::solve() {
   if (use_direct_solver()) {
     if (!f.valid) {
       f.colmajor = matrix_;
-      const Eigen::SparseMatrix<double, Eigen::ColMajor, int>& a = f.colmajor;
+      const UmfpackMatrix& a = f.colmajor;
       if (!f.analysed) {
         f.lu.analyzePattern(a);  // the pattern never changes: order the columns once
+        if (f.lu.info() != Eigen::Success)
+          throw std::runtime_error(fmt::format("EfgModel '{}': UMFPACK symbolic analysis failed: {}", problem_.name,
+                                               Factorisation::describe(f.lu.umfpackFactorizeReturncode())));
         f.analysed = true;
       }
       f.lu.factorize(a);
-      if (f.lu.info() != Eigen::Success)
+      const long status = f.lu.umfpackFactorizeReturncode();
+      if (!Factorisation::factorised(status))
         throw std::runtime_error(fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", problem_.name,
-                                             Factorisation::last_error(f.lu)));
+                                             Factorisation::describe(status)));
       f.valid = true;
     }
     const Eigen::VectorXd rhs = -residual_;
@@ -308,11 +323,7 @@ void EfgModel::solve() {
     if (!f.valid) {
       f.bicgstab.setTolerance(options_.iterative_tolerance);
       f.bicgstab.setMaxIterations(options_.iterative_max_iterations);
-      f.bicgstab.preconditioner().setDroptol(options_.ilut_drop_tolerance);
-      f.bicgstab.preconditioner().setFillfactor(options_.ilut_fill_factor);
       f.bicgstab.compute(matrix_);
-      if (f.bicgstab.info() != Eigen::Success)
-        throw std::runtime_error(fmt::format("EfgModel '{}': the incomplete LU preconditioner failed", problem_.name));
       f.valid = true;
     }
     du = f.bicgstab.solve(-residual_);

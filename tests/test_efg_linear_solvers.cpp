@@ -50,7 +50,7 @@ TEST(EfgLinearSolvers, IterativeFallbackReachesTheDirectSolution) {
 }
 
 TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
-  Eigen::SparseMatrix<double, Eigen::ColMajor, int> a(3, 3);
+  UmfpackMatrix a(3, 3);
   a.insert(0, 0) = 1.0;  // insert leaves the matrix uncompressed
   EXPECT_THROW(estimate_direct_solver(a), std::invalid_argument);
 }
