@@ -85,37 +85,6 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   return r;
 }
 
-int run_solve_meshless(const std::string& config, const std::string& out_dir) {
-  const core::Case c = core::load_case(config);
-  if (c.cut)
-    std::cerr << "warning: " << config << ": /cut is not modelled by the meshless solver yet (the enrichment of "
-                 "eqs. 29-32 is not wired into EfgModel); solving the uncut body\n";
-  Progress progress("solve meshless", 3 + c.time.steps);
-  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
-  progress.step("building geometry and the node cloud (Gmsh)");
-  core::GeometryOptions options;
-  options.build_fem_mesh = false;
-  const double t0 = progress.elapsed_seconds();
-  const core::Geometry g = core::build_geometry(c, options);
-  const double geometry_seconds = progress.elapsed_seconds() - t0;
-  ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
-                                 [&](const std::string& line) { progress.step(line); });
-  r.details["geometry_seconds"] = geometry_seconds;
-  r.setup_seconds += geometry_seconds;
-  r.total_seconds += geometry_seconds;
-  write_samples_csv(out.file("samples.csv").string(), r);
-  write_timings_json(out.file("timings.json").string(), r);
-  std::ofstream(out.file("case.json")) << c.document.dump(2) << "\n";
-  out.commit();
-  progress.done();
-  double max_u = 0.0;
-  for (Eigen::Index i = 0; i < r.sample_displacements.rows(); ++i)
-    max_u = std::max(max_u, r.sample_displacements.row(i).norm());
-  std::cout << fmt::format("meshless: {} steps, max sample displacement {:.4f} mm, {:.1f} s\nwrote {}\n",
-                           r.steps.size(), max_u * 1e3, r.total_seconds, out.destination().string());
-  return 0;
-}
-
 int run_verify_meshless(const std::string& out_dir, bool quick) {
   using nlohmann::json;
   const std::vector<int> orders = quick ? std::vector<int>{2, 3} : std::vector<int>{1, 2, 3, 4, 5};

@@ -1,6 +1,6 @@
 #pragma once
-// The meshless (EFG) model behind `tissue solve meshless` and `tissue verify meshless`; the subcommands are
-// registered in solve_commands.cpp and verify_commands.cpp.
+// The meshless (EFG) model behind `tissue solve meshless` (solve_commands.cpp) and `tissue verify meshless`
+// (verify_commands.cpp).
 #include <functional>
 #include <string>
 
@@ -16,9 +16,6 @@ namespace experiments {
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
                            const std::function<void(const std::string&)>& on_step = {},
                            const meshless::EfgOptions& options = {});
-
-/// `tissue solve meshless CONFIG --out DIR`: VTU per output step, samples.csv, timings.json, case.json.
-int run_solve_meshless(const std::string& config, const std::string& out_dir);
 
 /// `tissue verify meshless`: invariants, patch test, cantilever convergence and creep curve into
 /// OUT/meshless.json and OUT/meshless.md.

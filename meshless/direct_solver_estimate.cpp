@@ -32,6 +32,15 @@ DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern) {
   return e;
 }
 
+DirectSolverEstimate estimate_direct_solver_blocked(const UmfpackMatrix& block_pattern, int block_size) {
+  DirectSolverEstimate e = estimate_direct_solver(block_pattern);
+  const double b = block_size;
+  e.peak_memory_bytes *= b * b;
+  e.factor_bytes *= b * b;
+  e.factorisation_flops *= b * b * b;
+  return e;
+}
+
 double physical_memory_bytes() {
   const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGE_SIZE);
   return pages > 0 && page_size > 0 ? static_cast<double>(pages) * static_cast<double>(page_size) : 0.0;

@@ -110,7 +110,15 @@ bool EfgModel::choose_direct_solver() {
     case LinearSolverKind::iterative: return false;
     case LinearSolverKind::automatic: break;
   }
-  const DirectSolverEstimate e = estimate_direct_solver(UmfpackMatrix(matrix_));
+  // Analyse the node-pair pattern (symmetric, so its CSR arrays are also its CSC arrays), 9x smaller than
+  // the DOF pattern.
+  const int n = sparsity_->num_nodes();
+  UmfpackMatrix blocks(n, n);
+  blocks.resizeNonZeros(static_cast<Eigen::Index>(sparsity_->num_block_entries()));
+  for (int i = 0; i <= n; ++i) blocks.outerIndexPtr()[i] = i < n ? sparsity_->row_begin(i) : sparsity_->row_end(n - 1);
+  for (long long k = 0; k < sparsity_->num_block_entries(); ++k)
+    blocks.innerIndexPtr()[k] = sparsity_->column(static_cast<int>(k));
+  const DirectSolverEstimate e = estimate_direct_solver_blocked(blocks, 3);
   stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
   stats_.direct_flops_estimate = e.factorisation_flops;
   return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();

@@ -106,8 +106,6 @@ class EfgModel {
   const MlsShapeFunctions& shape_functions() const { return *mls_; }
   double alpha() const { return alpha_; }
   double residual_norm() const { return residual_.norm(); }
-  /// Iterations of the last iterative linear solve (0 when the direct solver is used).
-  int last_linear_iterations() const { return last_linear_iterations_; }
   /// Largest |sum_i int grad phi_i - oint phi_i n| over nodes before the VCI correction [m^2] (diagnostic).
   double divergence_defect() const { return divergence_defect_; }
 

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <iostream>
+#include <vector>
 
 #include "meshless/direct_solver_estimate.hpp"
 #include "meshless/efg_model.hpp"
@@ -47,6 +48,39 @@ TEST(EfgLinearSolvers, IterativeFallbackReachesTheDirectSolution) {
   EXPECT_EQ(iterative_stats.linear_solver.rfind("BiCGSTAB", 0), 0u);
   EXPECT_GT(direct.norm(), 0.0);
   EXPECT_LT(difference, 1e-6);
+}
+
+/// The node-pair pattern of a 27-point stencil on an n^3 grid, and the same pattern expanded to 3 x 3 blocks.
+UmfpackMatrix grid_pattern(int n, int block) {
+  std::vector<Eigen::Triplet<double, long>> entries;
+  auto id = [n](int x, int y, int z) { return (static_cast<long>(z) * n + y) * n + x; };
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x)
+        for (int dz = -1; dz <= 1; ++dz)
+          for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+              const int X = x + dx, Y = y + dy, Z = z + dz;
+              if (X < 0 || Y < 0 || Z < 0 || X >= n || Y >= n || Z >= n) continue;
+              for (int a = 0; a < block; ++a)
+                for (int b = 0; b < block; ++b)
+                  entries.emplace_back(block * id(x, y, z) + a, block * id(X, Y, Z) + b, 1.0);
+            }
+  UmfpackMatrix m(block * n * n * n, block * n * n * n);
+  m.setFromTriplets(entries.begin(), entries.end());
+  return m;
+}
+
+TEST(EfgLinearSolvers, BlockedEstimateMatchesTheFullAnalysis) {
+  const DirectSolverEstimate full = estimate_direct_solver(grid_pattern(12, 3));
+  const DirectSolverEstimate blocked = estimate_direct_solver_blocked(grid_pattern(12, 1), 3);
+  std::cout << "12^3 grid, 3 DOFs per node: peak memory " << full.peak_memory_bytes / 1e6 << " MB (full) vs "
+            << blocked.peak_memory_bytes / 1e6 << " MB (blocked), flops " << full.factorisation_flops / 1e9 << " vs "
+            << blocked.factorisation_flops / 1e9 << " Gflop\n";
+  EXPECT_GT(blocked.peak_memory_bytes, 0.5 * full.peak_memory_bytes);
+  EXPECT_LT(blocked.peak_memory_bytes, 2.0 * full.peak_memory_bytes);
+  EXPECT_GT(blocked.factorisation_flops, 0.33 * full.factorisation_flops);
+  EXPECT_LT(blocked.factorisation_flops, 3.0 * full.factorisation_flops);
 }
 
 TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
