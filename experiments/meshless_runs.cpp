@@ -77,7 +77,8 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["linear_solver"] = st.linear_solver;
   r.details["umfpack_peak_memory_estimate_bytes"] = st.direct_peak_memory_estimate;
   r.details["umfpack_flops_estimate"] = st.direct_flops_estimate;
-  r.details["nonlinear_solver"] = "full Newton, consistent tangent (core::KelvinLaw)";
+  r.details["nonlinear_solver"] =
+      "Newton on the consistent tangent (core::KelvinLaw), reusing the factorised tangent while it contracts the residual";
   r.details["setup_seconds"] = t.setup_seconds;
   r.details["shape_function_seconds"] = t.shape_function_seconds;
   r.details["assembly_seconds"] = t.assembly_seconds;
