@@ -1,11 +1,13 @@
 #include "meshless/direct_solver_estimate.hpp"
 
 #include <fmt/format.h>
+#include <amd.h>
 #include <umfpack.h>
 #include <unistd.h>
 
 #include <stdexcept>
 #include <type_traits>
+#include <vector>
 
 namespace meshless {
 
@@ -33,11 +35,26 @@ DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern) {
 }
 
 DirectSolverEstimate estimate_direct_solver_blocked(const UmfpackMatrix& block_pattern, int block_size) {
-  DirectSolverEstimate e = estimate_direct_solver(block_pattern);
+  // UMFPACK orders a symmetric pattern like this one with AMD (its symmetric strategy), so AMD's own
+  // analysis predicts the fill: L has LNZ off-diagonal block entries, U the same, each a dense b x b block.
+  // AMD alone takes seconds where UMFPACK's full symbolic analysis took minutes on a 32k-node cloud.
+  if (!block_pattern.isCompressed())
+    throw std::invalid_argument("estimate_direct_solver_blocked: the pattern must be compressed");
+  const SuiteSparse_long n = block_pattern.rows();
+  std::vector<SuiteSparse_long> permutation(static_cast<std::size_t>(n));
+  double control[AMD_CONTROL], info[AMD_INFO];
+  amd_l_defaults(control);
+  const SuiteSparse_long status =
+      amd_l_order(n, block_pattern.outerIndexPtr(), block_pattern.innerIndexPtr(), permutation.data(), control, info);
+  if (status < AMD_OK) throw std::runtime_error(fmt::format("AMD ordering failed (status {})", status));
   const double b = block_size;
-  e.peak_memory_bytes *= b * b;
-  e.factor_bytes *= b * b;
-  e.factorisation_flops *= b * b * b;
+  const double factor_entries = 2.0 * b * b * info[AMD_LNZ] + static_cast<double>(n) * b * b;  // L, U, diagonal blocks
+  const double matrix_bytes = static_cast<double>(block_pattern.nonZeros()) * b * b * (sizeof(double) + sizeof(long));
+  DirectSolverEstimate e;
+  e.factor_bytes = factor_entries * (sizeof(double) + sizeof(long));  // values and row indices
+  // UMFPACK also holds the matrix and its frontal work arrays during the factorisation.
+  e.peak_memory_bytes = 1.25 * e.factor_bytes + matrix_bytes;
+  e.factorisation_flops = 2.0 * info[AMD_NMULTSUBS_LU] * b * b * b;  // one multiply-subtract pair = 2 flops
   return e;
 }
 

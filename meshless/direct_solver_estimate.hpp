@@ -1,9 +1,10 @@
 #pragma once
-// Will a sparse LU of this matrix fit in memory? UMFPACK's symbolic analysis (column ordering and
-// elimination tree, no numerical work) predicts the peak memory, the size of the LU factors and the
-// flop count of the factorisation. The EFG model uses it to choose between the direct solver and the
-// iterative fallback from the actual sparsity pattern, rather than from a fixed DOF threshold: EFG rows
-// hold hundreds of entries, so the fill-in depends on the support size as much as on the node count.
+// Will a sparse LU of this matrix fit in memory? A fill-reducing ordering and its elimination tree (no
+// numerical work) predict the peak memory, the size of the LU factors and the flop count. The EFG model uses
+// the blocked AMD estimate to choose between the direct solver and the iterative fallback from the actual
+// sparsity pattern, rather than from a fixed DOF threshold: EFG rows hold hundreds of entries, so the fill-in
+// depends on the support size as much as on the node count. UMFPACK's full symbolic analysis is the
+// reference the blocked estimate is tested against.
 #include <Eigen/SparseCore>
 
 namespace meshless {
@@ -23,10 +24,11 @@ struct DirectSolverEstimate {
 /// Eigen::UmfPackLU uses. Throws std::runtime_error when UMFPACK rejects the pattern.
 DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern);
 
-/// The estimate for a matrix of dense `block_size` x `block_size` blocks (3 x 3 per EFG node pair), from the
-/// pattern of its blocks: block_size^2 fewer entries to order, so the analysis of a 32k-node cloud takes
-/// seconds instead of a minute. Memory is scaled by block_size^2 and flops by block_size^3 (each entry of
-/// the block factors is a dense block); tests/test_efg_linear_solvers.cpp compares it with the full analysis.
+/// The estimate for a matrix of dense `block_size` x `block_size` blocks (3 x 3 per EFG node pair) with a
+/// symmetric pattern, from AMD's analysis of the pattern of its blocks: block_size^2 fewer entries, and AMD
+/// alone instead of UMFPACK's whole symbolic analysis (seconds instead of two minutes on a 32k-node cloud).
+/// Each entry of the block factors is a dense block: memory scales by block_size^2 and flops by
+/// block_size^3. tests/test_efg_linear_solvers.cpp compares it with UMFPACK's full analysis.
 DirectSolverEstimate estimate_direct_solver_blocked(const UmfpackMatrix& block_pattern, int block_size);
 
 /// Physical memory of this machine [bytes] (sysconf), the budget the estimate is compared with.

@@ -79,8 +79,10 @@ TEST(EfgLinearSolvers, BlockedEstimateMatchesTheFullAnalysis) {
             << blocked.factorisation_flops / 1e9 << " Gflop\n";
   EXPECT_GT(blocked.peak_memory_bytes, 0.5 * full.peak_memory_bytes);
   EXPECT_LT(blocked.peak_memory_bytes, 2.0 * full.peak_memory_bytes);
-  EXPECT_GT(blocked.factorisation_flops, 0.33 * full.factorisation_flops);
-  EXPECT_LT(blocked.factorisation_flops, 3.0 * full.factorisation_flops);
+  // An estimate for a yes/no memory decision: memory within 2x, flops within 4x (UMFPACK counts the zeros
+  // its relaxed supernodes carry; AMD counts exact fill).
+  EXPECT_GT(blocked.factorisation_flops, 0.25 * full.factorisation_flops);
+  EXPECT_LT(blocked.factorisation_flops, 4.0 * full.factorisation_flops);
 }
 
 TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
