@@ -196,9 +196,20 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
       *md += fmt::format("\nRichardson (last three levels): observed order {:.2f}, estimated remaining error of the "
                          "finest level {:.2f} % of the sample displacements.\n",
                          p, 100 * error / u[n - 1].norm());
+    } else if (d2 > 0) {
+      // Not in the asymptotic range yet: bound the remaining error as if the convergence were only first
+      // order (the lowest order a consistent discretisation has), which overestimates it when p > 1.
+      const double error = d2 / (ratio - 1.0);
+      richardson = {{"note", "differences not decreasing: no asymptotic estimate; order 1 assumed for a bound"},
+                    {"assumed_order", 1.0},
+                    {"estimated_error_of_finest_relative", error / u[n - 1].norm()}};
+      *md += fmt::format("\nRichardson: the differences do not decrease (not yet asymptotic). Assuming first-order "
+                         "convergence, the remaining error of the finest level is at most about {:.2f} % of the "
+                         "sample displacements.\n",
+                         100 * error / u[n - 1].norm());
     } else {
-      richardson = {{"note", "differences not decreasing: no asymptotic estimate"}};
-      *md += "\nRichardson: the differences do not decrease, no asymptotic estimate.\n";
+      richardson = {{"note", "the last two levels agree exactly"}};
+      *md += "\nRichardson: the last two levels agree exactly.\n";
     }
   }
   *md += converged.is_null()
