@@ -355,24 +355,23 @@ void ViscoelasticSolver::for_each_quadrature_point(
   }
 }
 
-core::Vector6 ViscoelasticSolver::average_stress() const {
+core::Vector6 ViscoelasticSolver::volume_average(
+    const std::function<core::Vector6(const PointHistory&)>& field) const {
   core::Vector6 sum = core::Vector6::Zero();
   double volume = 0.0;
   for_each_quadrature_point([&](const Point<3>&, double jxw, const PointHistory& h) {
-    sum += h.state.stress * jxw;
+    sum += field(h) * jxw;
     volume += jxw;
   });
   return sum / volume;
 }
 
+core::Vector6 ViscoelasticSolver::average_stress() const {
+  return volume_average([](const PointHistory& h) { return h.state.stress; });
+}
+
 core::Vector6 ViscoelasticSolver::average_strain() const {
-  core::Vector6 sum = core::Vector6::Zero();
-  double volume = 0.0;
-  for_each_quadrature_point([&](const Point<3>&, double jxw, const PointHistory& h) {
-    sum += h.state.strain * jxw;
-    volume += jxw;
-  });
-  return sum / volume;
+  return volume_average([](const PointHistory& h) { return h.state.strain; });
 }
 
 BallStrain ViscoelasticSolver::strain_in_ball(const Eigen::Vector3d& centre, double radius) const {

@@ -67,6 +67,8 @@ class ViscoelasticSolver {
   struct ScratchData;
   struct CopyData;
 
+  /// Volume average of a per-point quantity of the converged history.
+  core::Vector6 volume_average(const std::function<core::Vector6(const PointHistory&)>& field) const;
   /// Visit every quadrature point's converged history with its position and weight JxW.
   void for_each_quadrature_point(
       const std::function<void(const dealii::Point<3>&, double, const PointHistory&)>& visit) const;
