@@ -1,7 +1,7 @@
 // EFG model cost on box clouds of ~2k, 8k and 32k nodes (13^3, 20^3, 32^3; spacing 5 mm, d_max = 2, k = 6,
 // quadrature order 2 on 6 tets per grid cell): one full assembly of eqs. 20-24 (material update, residual and
 // tangent) and one linear solve: the automatic choice (UMFPACK factorisation + back substitution when its
-// symbolic memory estimate fits half the RAM, Jacobi-BiCGSTAB otherwise: the 32k cloud), and Jacobi-BiCGSTAB
+// estimated peak memory fits half the RAM, Jacobi-BiCGSTAB otherwise: the 32k cloud), and Jacobi-BiCGSTAB
 // at the two smaller sizes for comparison (docs/PERFORMANCE.md).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.

@@ -5,14 +5,12 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <map>
 #include <optional>
 #include <queue>
-#include <unordered_map>
 
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_mesh.hpp"

@@ -15,9 +15,9 @@ namespace meshless {
 using UmfpackMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, long>;
 
 struct DirectSolverEstimate {
-  double peak_memory_bytes = 0.0;   ///< UMFPACK_PEAK_MEMORY_ESTIMATE (symbolic + numeric, upper bound)
-  double factor_bytes = 0.0;        ///< UMFPACK_NUMERIC_SIZE_ESTIMATE: the L and U factors
-  double factorisation_flops = 0.0; ///< UMFPACK_FLOPS_ESTIMATE
+  double peak_memory_bytes = 0.0;   ///< during the factorisation: factors, matrix and work arrays
+  double factor_bytes = 0.0;        ///< the L and U factors
+  double factorisation_flops = 0.0; ///< floating-point operations of the numerical factorisation
 };
 
 /// Symbolic analysis of `pattern` (values ignored) with UMFPACK's default controls, the same ones

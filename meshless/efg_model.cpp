@@ -110,15 +110,7 @@ bool EfgModel::choose_direct_solver() {
     case LinearSolverKind::iterative: return false;
     case LinearSolverKind::automatic: break;
   }
-  // Analyse the node-pair pattern (symmetric, so its CSR arrays are also its CSC arrays), 9x smaller than
-  // the DOF pattern.
-  const int n = sparsity_->num_nodes();
-  UmfpackMatrix blocks(n, n);
-  blocks.resizeNonZeros(static_cast<Eigen::Index>(sparsity_->num_block_entries()));
-  for (int i = 0; i <= n; ++i) blocks.outerIndexPtr()[i] = i < n ? sparsity_->row_begin(i) : sparsity_->row_end(n - 1);
-  for (long long k = 0; k < sparsity_->num_block_entries(); ++k)
-    blocks.innerIndexPtr()[k] = sparsity_->column(static_cast<int>(k));
-  const DirectSolverEstimate e = estimate_direct_solver_blocked(blocks, 3);
+  const DirectSolverEstimate e = estimate_direct_solver_blocked(sparsity_->node_pattern(), 3);
   stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
   stats_.direct_flops_estimate = e.factorisation_flops;
   return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();
@@ -200,7 +192,7 @@ void EfgModel::setup_system() {
   stats_.penalised_area = boundary_.penalised_area;
   stats_.loaded_area = boundary_.loaded_area;
   const auto t_choice = std::chrono::steady_clock::now();
-  use_direct_ = choose_direct_solver();  // a symbolic LU analysis: part of the set-up cost
+  use_direct_ = choose_direct_solver();  // an AMD ordering of the node pairs: part of the set-up cost
   timings_.setup_seconds += seconds_since(t_choice);
   stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (Jacobi preconditioner)";
   set_up_ = true;

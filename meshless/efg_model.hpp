@@ -54,7 +54,8 @@ struct EfgStatistics {
   double alpha = 0.0;                 ///< penalty parameter [Pa/m]
   double penalised_area = 0.0, loaded_area = 0.0;  ///< [m^2]
   std::string linear_solver;
-  /// UMFPACK's symbolic estimates for this matrix (automatic solver choice only; 0 when not estimated).
+  /// Predicted cost of factorising this matrix (meshless/direct_solver_estimate.hpp; automatic solver choice
+  /// only, 0 when not estimated).
   double direct_peak_memory_estimate = 0.0;  ///< [bytes]
   double direct_flops_estimate = 0.0;
 };

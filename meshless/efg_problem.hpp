@@ -17,7 +17,7 @@ namespace meshless {
 using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
 
 enum class LinearSolverKind {
-  automatic,  ///< direct when UMFPACK's estimated peak memory fits EfgOptions::direct_solver_memory_fraction
+  automatic,  ///< direct when the estimated peak memory of the LU fits EfgOptions::direct_solver_memory_fraction
   direct,     ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
   iterative,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (for clouds too large to factorise)
 };
@@ -34,8 +34,8 @@ struct EfgOptions {
   /// for the background quadrature. Makes the linear patch test pass to round-off; off = plain eq. 22.
   bool variationally_consistent = true;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
-  /// automatic: factorise when UMFPACK's symbolic estimate of its peak memory (meshless/direct_solver_estimate.hpp)
-  /// is below this fraction of the physical memory; the rest is left for the model's own tables.
+  /// automatic: factorise when the estimated peak memory of the LU (meshless/direct_solver_estimate.hpp, AMD on
+  /// the node pairs) is below this fraction of the physical memory; the rest is left for the model's own tables.
   double direct_solver_memory_fraction = 0.5;
   /// Relative residual of each BiCGSTAB solve. Newton's own test decides convergence, so a looser solve only
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.

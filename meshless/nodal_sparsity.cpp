@@ -61,4 +61,13 @@ SparseMatrix NodalSparsity::make_matrix() const {
   return m;
 }
 
+Eigen::SparseMatrix<double, Eigen::ColMajor, long> NodalSparsity::node_pattern() const {
+  Eigen::SparseMatrix<double, Eigen::ColMajor, long> m(num_nodes(), num_nodes());
+  m.resizeNonZeros(static_cast<Eigen::Index>(columns_.size()));
+  std::copy(row_offsets_.begin(), row_offsets_.end(), m.outerIndexPtr());
+  std::copy(columns_.begin(), columns_.end(), m.innerIndexPtr());
+  std::fill(m.valuePtr(), m.valuePtr() + columns_.size(), 0.0);
+  return m;
+}
+
 }  // namespace meshless

@@ -28,6 +28,10 @@ class NodalSparsity {
 
   /// A 3N by 3N row-major matrix with this pattern and zero values.
   SparseMatrix make_matrix() const;
+  /// The N by N node-pair pattern as a compressed column-major matrix with 64-bit indices (values zero):
+  /// what an ordering analyses instead of the 9x larger DOF pattern. The pattern is symmetric, so the CSR
+  /// arrays serve as CSC arrays.
+  Eigen::SparseMatrix<double, Eigen::ColMajor, long> node_pattern() const;
 
   /// Index into the value array of entry (3i + a, 3 * column(row_begin(i) + k) + b).
   long long value_index(int i, int a, int k, int b) const {

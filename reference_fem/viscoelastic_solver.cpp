@@ -1,7 +1,5 @@
 #include "reference_fem/viscoelastic_solver.hpp"
 
-#include "core/voigt.hpp"
-
 #include <deal.II/base/multithread_info.h>
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/work_stream.h>
@@ -23,6 +21,8 @@
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
+
+#include "core/voigt.hpp"
 
 namespace reference_fem {
 namespace {

@@ -27,7 +27,7 @@ TEST(EfgLinearSolvers, AutomaticChoiceFactorisesSmallCloudsAndReportsTheEstimate
   EfgStatistics small, larger;
   solve_sheared_box(5, LinearSolverKind::automatic, &small);
   solve_sheared_box(8, LinearSolverKind::automatic, &larger);
-  std::cout << "UMFPACK estimates: 5^3 nodes " << small.direct_peak_memory_estimate / 1e6 << " MB, "
+  std::cout << "LU estimates (AMD, blocked): 5^3 nodes " << small.direct_peak_memory_estimate / 1e6 << " MB, "
             << small.direct_flops_estimate / 1e6 << " Mflop; 8^3 nodes " << larger.direct_peak_memory_estimate / 1e6
             << " MB, " << larger.direct_flops_estimate / 1e6 << " Mflop\n";
   EXPECT_EQ(small.linear_solver.rfind("UMFPACK", 0), 0u);
