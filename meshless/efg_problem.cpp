@@ -4,6 +4,8 @@
 
 #include <stdexcept>
 
+#include "core/load_program.hpp"
+
 namespace meshless {
 
 EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
@@ -16,14 +18,11 @@ EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
   p.quadrature_order = c.meshless.quadrature_order;
   p.node_spacing = c.meshless.node_spacing;
   p.penalty_factor = c.meshless.penalty_factor;
-  const double area = p.mesh.tagged_area(core::FaceTag::load);
-  if (!(area > 0.0))
-    throw std::runtime_error(fmt::format("case '{}': the meshless mesh has no load-tagged faces", c.name));
-  const Eigen::Vector3d t = c.load.force / area;  // uniform traction: total force / A_patch
+  const core::LoadProgram program = core::load_program(c, p.mesh);
+  const Eigen::Vector3d t = program.traction;
   p.traction = [t](const Eigen::Vector3d&) { return t; };
-  const core::LoadSpec load = c.load;
-  p.load_scale = [load](double time) { return load.force_scale(time); };
-  for (int n = 1; n <= c.time.steps; ++n) p.step_times.push_back(n * c.time.dt());
+  p.load_scale = [program](double time) { return program.scale(time); };
+  p.step_times = program.step_times;
   p.output_every = c.output.every;
   return p;
 }

@@ -5,6 +5,8 @@
 
 #include <chrono>
 
+#include "core/load_program.hpp"
+
 #include "reference_fem/sample_evaluator.hpp"
 #include "reference_fem/triangulation_from_mesh.hpp"
 #include "reference_fem/viscoelastic_solver.hpp"
@@ -50,15 +52,13 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
 }
 
 FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const FemRunOptions& options) {
-  const double area = geometry.fem_mesh.tagged_area(core::FaceTag::load);
-  if (!(area > 0.0)) throw std::runtime_error("run_case: the FEM mesh has no load faces");
+  const core::LoadProgram program = core::load_program(c, geometry.fem_mesh);
   BoundaryConditions bc;
   bc.dirichlet.push_back(DirichletCondition{});  // the fixed region: u = 0 on every component (strong)
   TractionCondition load;
   load.boundary_id = boundary_id::load;
-  load.traction = c.load.force / area;  // uniform traction = force / patch area
-  const core::LoadSpec spec = c.load;
-  load.scale = [spec](double t) { return spec.force_scale(t); };  // ramped over the load time
+  load.traction = program.traction;
+  load.scale = [program](double t) { return program.scale(t); };
   bc.tractions.push_back(load);
 
   SolverParameters parameters;
@@ -67,16 +67,14 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
   parameters.newton.tolerance = c.fem.newton_tolerance;
   parameters.newton.max_iterations = c.fem.max_newton_iterations;
 
-  std::vector<double> times;  // the case's time steps t_n = n dt, n = 1..steps
-  for (int n = 1; n <= c.time.steps; ++n) times.push_back(n * c.time.dt());
   FemRunOptions run = options;
   if (!(run.probe_radius > 0.0)) {
     run.probe_centre = geometry.load_centre;
     run.probe_radius = c.load.radius;
   }
   FemRunResult result =
-      solve_on_mesh(geometry.fem_mesh, parameters, bc, times, geometry.sample_points, run, c.output.every);
-  result.load_area = area;
+      solve_on_mesh(geometry.fem_mesh, parameters, bc, program.step_times, geometry.sample_points, run, c.output.every);
+  result.load_area = program.patch_area;
   for (const auto tag : geometry.fem_mesh.face_tags) result.crack_faces += tag == core::FaceTag::crack;
   return result;
 }
