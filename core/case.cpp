@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "core/json_reader.hpp"
 
@@ -77,6 +78,8 @@ TimeSpec read_time(const JsonReader& r) {
   TimeSpec t;
   t.total = r.positive("total");
   t.steps = r.integer("steps", 1, 100000);
+  // Absent: 0, which TimeSpec::minimum_step() turns into its default.
+  t.min_step = r.in_range("min_step", 0.0, t.dt(), false, true, 0.0);
   r.finish();
   return t;
 }
@@ -162,16 +165,22 @@ Case parse_case(const nlohmann::json& document, const std::string& file) {
   return c;
 }
 
+Case parse_case_text(const std::string& text, const std::string& file) {
+  nlohmann::json document;
+  try {
+    document = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/false);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw CaseError(file, "", fmt::format("expected valid JSON: {}", e.what()));
+  }
+  return parse_case(document, file);
+}
+
 Case load_case(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw CaseError(path, "", "cannot open the case file (does it exist and is it readable?)");
-  nlohmann::json document;
-  try {
-    document = nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/false);
-  } catch (const nlohmann::json::parse_error& e) {
-    throw CaseError(path, "", fmt::format("expected valid JSON: {}", e.what()));
-  }
-  return parse_case(document, path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_case_text(text.str(), path);
 }
 
 }  // namespace core

@@ -44,7 +44,12 @@ struct LoadSpec {
 struct TimeSpec {
   double total = 1.0;  ///< [s]
   int steps = 10;
+  /// Smallest step the models may cut a step back to when Newton fails [s]; 0 selects the default,
+  /// dt() / 2^kDefaultCutbackHalvings.
+  double min_step = 0.0;
+  static constexpr int kDefaultCutbackHalvings = 6;
   double dt() const { return total / steps; }
+  double minimum_step() const { return min_step > 0.0 ? min_step : dt() / (1 << kDefaultCutbackHalvings); }
 };
 
 /// Sample points (paper §5.4): `count` surface points chosen deterministically near the load point.
@@ -102,5 +107,8 @@ Case load_case(const std::string& path);
 
 /// Validate an in-memory document; `file` is used in messages and to resolve relative STL paths.
 Case parse_case(const nlohmann::json& document, const std::string& file);
+
+/// Parse JSON text (no comments) and validate it as parse_case does. Throws CaseError, also for invalid JSON.
+Case parse_case_text(const std::string& text, const std::string& file);
 
 }  // namespace core

@@ -18,7 +18,9 @@
 //        sigma_0 = (exp(-dt/tau) - 1) h_n.
 #include "core/kelvin_law.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -99,6 +101,27 @@ Matrix6 KelvinLaw::adjusted_strain_jacobian(const Vector6& strain) const {
     jacobian.col(j) = strain_to_voigt(de + k * (de * e + e * de));
   }
   return jacobian;
+}
+
+Eigen::Vector3d KelvinLaw::principal_strains(const Vector6& strain) {
+  // Closed-form 3x3 eigenvalues: this runs at every integration point in every Newton iteration, and the
+  // margin only needs a few correct digits.
+  Eigen::SelfAdjointEigenSolver<Matrix3> eigen;
+  eigen.computeDirect(voigt_to_strain(strain), Eigen::EigenvaluesOnly);
+  return eigen.eigenvalues();
+}
+
+double KelvinLaw::admissibility_margin(const Vector6& strain) const {
+  const double k = parameters_.k;
+  if (k == 0.0) return 1.0;
+  const Eigen::Vector3d lambda = principal_strains(strain);
+  // 1 + 2 k lambda is smallest at the smallest principal strain for k > 0 and at the largest for k < 0.
+  return 1.0 + 2.0 * k * (k > 0.0 ? lambda.minCoeff() : lambda.maxCoeff());
+}
+
+double KelvinLaw::limit_strain() const {
+  const double k = parameters_.k;
+  return k == 0.0 ? std::numeric_limits<double>::infinity() : -1.0 / (2.0 * k);
 }
 
 double KelvinLaw::step_modulus_factor(double dt) const {

@@ -54,6 +54,19 @@ class KelvinLaw {
   Vector6 adjusted_strain(const Vector6& strain) const;
   Matrix6 adjusted_strain_jacobian(const Vector6& strain) const;
 
+  /// Principal strains (eigenvalues of the strain tensor), ascending.
+  static Eigen::Vector3d principal_strains(const Vector6& strain);
+
+  /// The admissible range of N (docs/MATERIAL.md §1.5). In the principal frame of eps, dN/deps scales a
+  /// strain increment's (i, j) component by 1 + k (lambda_i + lambda_j), so its smallest eigenvalue is
+  /// min_i (1 + 2 k lambda_i), which this returns (1 for k = 0). The consistent tangent is that factor times
+  /// C0 in its weakest direction: at 0 it is singular, below 0 N is no longer monotone and no equilibrium
+  /// exists past the peak of N. A strain is admissible while the margin is > 0.
+  double admissibility_margin(const Vector6& strain) const;
+  /// The principal strain at which the margin vanishes, -1/(2k): compressive for k > 0, tensile for k < 0,
+  /// infinite for k = 0.
+  double limit_strain() const;
+
   /// Effective step modulus factor: g_inf + (1-g_inf) (tau/dt)(1 - exp(-dt/tau)).  dt = 0 -> 1.
   double step_modulus_factor(double dt) const;
 

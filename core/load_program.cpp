@@ -15,6 +15,7 @@ LoadProgram load_program(const Case& c, const TetMesh& mesh) {
   p.traction = c.load.force / p.patch_area;  // uniform traction: total force / patch area
   p.load = c.load;
   for (int n = 1; n <= c.time.steps; ++n) p.step_times.push_back(n * c.time.dt());
+  p.min_step = c.time.minimum_step();
   return p;
 }
 

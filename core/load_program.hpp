@@ -19,6 +19,8 @@ struct LoadProgram {
   LoadSpec load;            ///< the case's load (force_scale(t) ramps the traction)
   /// Step times t_n = n * dt, n = 1..steps [s]; the body starts undeformed at t = 0.
   std::vector<double> step_times;
+  /// Smallest step a failed step may be cut back to (TimeSpec::minimum_step()) [s].
+  double min_step = 0.0;
 
   double scale(double t) const { return load.force_scale(t); }
 };

@@ -49,11 +49,14 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                     {{"displacement", vector_field(model.nodal_displacements())}}, {});
     }
     r.steps.push_back({rec.step, rec.time, seconds_since(t0), rec.assembly_seconds, rec.solve_seconds,
-                       rec.newton_iterations, rec.residuals, rec.linear_iterations});
+                       rec.newton_iterations, rec.residuals, rec.linear_iterations, rec.substeps,
+                       rec.failed_attempts, rec.admissibility_margin});
     if (on_step)
-      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}{}", step, n_steps, rec.time,
-                          rec.newton_iterations, rec.residuals.back(),
-                          rec.reused_factorisation ? " (factorisation reused)" : ""));
+      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}{}{}", step, n_steps,
+                          rec.time, rec.newton_iterations, rec.residuals.back(),
+                          rec.reused_factorisation ? " (factorisation reused)" : "",
+                          rec.cutbacks > 0 ? fmt::format(", {} cut-backs into {} sub-steps", rec.cutbacks, rec.substeps)
+                                           : std::string()));
   }
   r.sample_points = g.sample_points;
   r.sample_displacements = model.displacements_at(g.sample_points);
@@ -79,6 +82,8 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["umfpack_flops_estimate"] = st.direct_flops_estimate;
   r.details["nonlinear_solver"] =
       "Newton on the consistent tangent (core::KelvinLaw), reusing the factorised tangent while it contracts the residual";
+  r.details["law_admissibility"] = admissibility_json(model.smallest_margin(), c.material.k);
+  r.details["min_step_seconds"] = model.problem().min_step;
   r.details["setup_seconds"] = t.setup_seconds;
   r.details["shape_function_seconds"] = t.shape_function_seconds;
   r.details["assembly_seconds"] = t.assembly_seconds;

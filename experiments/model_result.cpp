@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <fstream>
 #include <stdexcept>
 
@@ -26,9 +27,19 @@ nlohmann::json timings_json(const ModelResult& r) {
   j["setup_seconds"] = r.setup_seconds;
   j["total_seconds"] = r.total_seconds;
   double assembly = 0.0, solve = 0.0;
-  int iterations = 0;
+  int iterations = 0, cutbacks = 0;
+  double smallest_margin = 1.0;
   nlohmann::json steps = nlohmann::json::array();
   for (const auto& s : r.steps) {
+    nlohmann::json attempts = nlohmann::json::array();
+    for (const core::NewtonAttempt& a : s.failed_attempts)
+      attempts.push_back({{"t_start", a.t_start},
+                          {"t_end", a.t_end},
+                          {"newton_iterations", a.iterations},
+                          {"relative_residuals", a.residuals},
+                          {"failure", a.failure}});
+    cutbacks += static_cast<int>(s.failed_attempts.size());
+    smallest_margin = std::min(smallest_margin, s.admissibility_margin);
     assembly += s.assembly_seconds;
     solve += s.solve_seconds;
     iterations += s.iterations;
@@ -39,14 +50,32 @@ nlohmann::json timings_json(const ModelResult& r) {
                      {"solve_seconds", s.solve_seconds},
                      {"newton_iterations", s.iterations},
                      {"linear_iterations", s.linear_iterations},
-                     {"relative_residuals", s.residuals}});
+                     {"relative_residuals", s.residuals},
+                     {"min_one_plus_2k_lambda", s.admissibility_margin},
+                     {"substeps", s.substeps},
+                     {"cutbacks", static_cast<int>(s.failed_attempts.size())},
+                     {"failed_attempts", attempts}});
   }
   j["assembly_seconds"] = assembly;
   j["solve_seconds"] = solve;
   j["newton_iterations_total"] = iterations;
+  j["cutbacks_total"] = cutbacks;  // failed Newton attempts whose step was halved and retried
+  j["min_one_plus_2k_lambda"] = smallest_margin;  // over the converged steps; > 0 inside the admissible range
   j["steps"] = steps;
   j["details"] = r.details;
   return j;
+}
+
+nlohmann::json admissibility_json(const core::SmallestMargin& m, double k) {
+  const Eigen::Vector3d x = m.point * 1e3;
+  return {{"measure", "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
+                      "converged states (docs/MATERIAL.md); the strain must keep it > 0"},
+          {"min_one_plus_2k_lambda", m.margin},
+          {"k", k},
+          {"limit_principal_strain", k == 0.0 ? nlohmann::json(nullptr) : nlohmann::json(-1.0 / (2.0 * k))},
+          {"time", m.time},
+          {"point_mm", {x.x(), x.y(), x.z()}},
+          {"strain", {m.strain[0], m.strain[1], m.strain[2], m.strain[3], m.strain[4], m.strain[5]}}};
 }
 
 void write_timings_json(const std::string& path, const ModelResult& r) {

@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "core/inadmissible_strain.hpp"
+#include "core/step_cutback.hpp"
+
 namespace experiments {
 
 struct StepTiming {
@@ -18,6 +21,9 @@ struct StepTiming {
   int iterations = 0;            ///< Newton iterations (linear solves)
   std::vector<double> residuals; ///< relative residual history
   int linear_iterations = 0;     ///< iterations of the linear solver over the step (0 for direct)
+  int substeps = 1;              ///< converged sub-steps (more than 1 after a cut-back)
+  std::vector<core::NewtonAttempt> failed_attempts;  ///< Newton attempts that failed and were cut back
+  double admissibility_margin = 1.0;  ///< smallest 1 + 2k lambda at the converged state (docs/MATERIAL.md)
 };
 
 struct ModelResult {
@@ -35,5 +41,7 @@ void write_samples_csv(const std::string& path, const ModelResult& result);
 /// timings.json: setup, totals and per-step timings with Newton iterations and residuals.
 nlohmann::json timings_json(const ModelResult& result);
 void write_timings_json(const std::string& path, const ModelResult& result);
+/// The smallest 1 + 2k lambda of a run, where it occurred, and the limit strain -1/(2k) (details of timings.json).
+nlohmann::json admissibility_json(const core::SmallestMargin& smallest, double k);
 
 }  // namespace experiments

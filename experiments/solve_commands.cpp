@@ -33,7 +33,8 @@ void print_summary(const ModelResult& r) {
                            r.model, r.steps.size(), iterations, max_u * 1e3, r.total_seconds);
 }
 
-ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
+ModelResult to_model_result(const core::Case& c, const core::Geometry& g, const reference_fem::FemRunResult& f,
+                            double setup) {
   ModelResult r;
   r.model = "fem";
   r.sample_points = g.sample_points;
@@ -43,7 +44,7 @@ ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRun
   int factorizations = 0;
   for (const auto& s : f.steps) {
     r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
-                       s.residuals, s.linear_iterations});
+                       s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin});
     factorizations += s.factorizations;
   }
   r.details["lu_factorizations"] = factorizations;
@@ -55,6 +56,8 @@ ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRun
   r.details["probe_strain"] = {{"measure", "largest absolute principal strain within the load radius of the load centre"},
                                {"mean", f.probe_strain.mean},
                                {"peak", f.probe_strain.peak}};
+  r.details["law_admissibility"] = admissibility_json(f.smallest_margin, c.material.k);
+  r.details["min_step_seconds"] = c.time.minimum_step();
   r.details["geometry_seconds"] = setup;
   r.details["timer_sections_seconds"] = f.sections;
   std::vector<double> offsets_mm;
@@ -86,12 +89,15 @@ int run_solve_fem(const std::string& config, const std::string& out_dir) {
   reference_fem::FemRunOptions run;
   if (c.output.vtu) run.vtu_prefix = out.file("displacement").string();
   run.on_step = [&](const reference_fem::StepReport& s) {
-    progress.step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} GMRES, {} LU), residual {:.2e}",
+    progress.step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} GMRES, {} LU), residual {:.2e}{}",
                               s.step, c.time.steps, s.time, s.newton_iterations, s.linear_iterations,
-                              s.factorizations, s.residuals.back()));
+                              s.factorizations, s.residuals.back(),
+                              s.failed_attempts.empty() ? std::string()
+                                                        : fmt::format(", {} cut-backs into {} sub-steps",
+                                                                      s.failed_attempts.size(), s.substeps)));
   };
   const reference_fem::FemRunResult f = reference_fem::run_case(c, g, run);
-  const ModelResult r = to_model_result(g, f, geometry_seconds);
+  const ModelResult r = to_model_result(c, g, f, geometry_seconds);
   write_model_files(out, c, r);
   out.commit();
   progress.done();

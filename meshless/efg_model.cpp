@@ -201,6 +201,8 @@ void EfgModel::setup_system() {
 void EfgModel::update_material(double dt) {
   // eq. 17: strain from the current parameters; eq. 13 through the shared law (one state per point).
   const ShapeTable& t = volume_;
+  const bool check_margin = problem_.material.k != 0.0;  // the margin is 1 everywhere when k = 0
+  if (check_margin) margins_.resize(t.size());
   parallel_for(t.size(), 512, [&](int q) {
     core::Vector6 e = core::Vector6::Zero();
     for (int s = t.begin(q); s < t.end(q); ++s) {
@@ -214,10 +216,21 @@ void EfgModel::update_material(double dt) {
       e[5] += g.z() * u.x() + g.x() * u.z();
     }
     strain_[q] = e;
+    if (!e.allFinite())
+      throw std::runtime_error(fmt::format("EfgModel '{}': non-finite strain at volume point {}", problem_.name, q));
+    if (check_margin) margins_[q] = law_.admissibility_margin(e);
     const core::KelvinResponse r = law_.update(states_[q], e, dt);
     stress_[q] = r.stress;
     tangent_[q] = r.tangent;
   });
+  // The law's admissible range (docs/MATERIAL.md §1.5), at every point of every iterate: past it the tangent is
+  // singular and no equilibrium exists, so stop with the point and the strain rather than let Newton wander.
+  weakest_point_ = -1;
+  if (!check_margin || margins_.empty()) return;
+  weakest_point_ = static_cast<int>(std::min_element(margins_.begin(), margins_.end()) - margins_.begin());
+  if (!(margins_[weakest_point_] > 0.0))
+    throw core::InadmissibleStrain(fmt::format("meshless (EFG) model '{}'", problem_.name), current_time_,
+                                   t.points.row(weakest_point_).transpose(), strain_[weakest_point_], law_);
 }
 
 void EfgModel::assemble_system(bool with_matrix) {
@@ -346,50 +359,92 @@ StepRecord EfgModel::solve_step(int step) {
   StepRecord rec;
   rec.step = step;
   rec.time = times[step - 1];
-  rec.dt = rec.time - (step >= 2 ? times[step - 2] : 0.0);
+  const double t_start = step >= 2 ? times[step - 2] : 0.0;
+  rec.dt = rec.time - t_start;
   rec.load_scale = problem_.load_scale(rec.time);
-  current_dt_ = rec.dt;
-  external_ = boundary_.penalty_load + rec.load_scale * boundary_.traction_load;
+  // One Newton solve over the whole step; halved sub-steps only when it fails.
+  const core::CutBackRecord cut = core::advance_with_cutback(
+      fmt::format("meshless (EFG) model '{}'", problem_.name), t_start, rec.time, problem_.min_step,
+      [&](double t_from, double t_to) { return newton_step(t_from, t_to, &rec); });
+  rec.substeps = cut.substeps;
+  rec.cutbacks = cut.cutbacks;
+  rec.failed_attempts = cut.failures;
+  timings_.assembly_seconds += rec.assembly_seconds;
+  timings_.solve_seconds += rec.solve_seconds;
+  records_.push_back(rec);
+  return rec;
+}
+
+core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord* rec) {
+  core::NewtonAttempt attempt;
+  attempt.t_start = t_from;
+  attempt.t_end = t_to;
+  current_time_ = t_to;
+  current_dt_ = t_to - t_from;
+  external_ = boundary_.penalty_load + problem_.load_scale(t_to) * boundary_.traction_load;
   double reference = external_.norm();
+  const Eigen::VectorXd u_start = u_;  // the committed state: restored when this attempt fails
 
   // Newton with tangent reuse. A factorisation costs seconds (dense EFG rows), a back-substitution a
   // fraction of that, so the last factorised consistent tangent is kept while it still contracts the
   // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
   // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
   const bool constant_tangent = problem_.material.k == 0.0;
+  const core::DivergenceTest diverging;
   bool refresh = !factorisation_->valid || factorised_dt_ != current_dt_;
   double previous = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
     const bool reuse = !refresh && factorisation_->valid && factorised_dt_ == current_dt_;
     auto t0 = std::chrono::steady_clock::now();
-    assemble_system(!reuse);
-    if (reuse) rec.reused_factorisation = true;
-    rec.assembly_seconds += seconds_since(t0);
+    try {
+      assemble_system(!reuse);
+    } catch (const core::InadmissibleStrain&) {
+      throw;  // no step size helps: stop the run
+    } catch (const std::runtime_error& e) {
+      attempt.failure = e.what();
+      break;
+    }
+    if (reuse) rec->reused_factorisation = true;
+    rec->assembly_seconds += seconds_since(t0);
     const double r = residual_.norm();
     if (!(reference > 0.0)) reference = r > 0.0 ? r : 1.0;
-    rec.residuals.push_back(r / reference);
-    if (!std::isfinite(r))
-      throw std::runtime_error(fmt::format("EfgModel '{}': step {} iteration {}: non-finite residual", problem_.name,
-                                           step, it));
+    attempt.residuals.push_back(r / reference);
+    attempt.failure = diverging(attempt.residuals);
+    if (!attempt.converged()) break;
     refresh = !constant_tangent && reuse && r > options_.refactor_contraction * previous;
     previous = r;
     if (r <= options_.newton_tolerance * reference) break;
-    if (it >= options_.max_newton_iterations)
-      throw std::runtime_error(fmt::format(
-          "EfgModel '{}': Newton did not converge in step {} (t = {:g} s) after {} iterations: ||R||/||F|| = {:.3e}",
-          problem_.name, step, rec.time, it, r / reference));
+    if (it >= options_.max_newton_iterations) {
+      attempt.failure = "the iteration limit (max_newton_iterations) was reached";
+      break;
+    }
     t0 = std::chrono::steady_clock::now();
-    solve();
-    rec.solve_seconds += seconds_since(t0);
-    rec.linear_iterations += last_linear_iterations_;
-    ++rec.newton_iterations;
+    try {
+      solve();
+    } catch (const std::runtime_error& e) {
+      attempt.failure = e.what();
+      break;
+    }
+    rec->solve_seconds += seconds_since(t0);
+    rec->linear_iterations += last_linear_iterations_;
+    ++rec->newton_iterations;
+    ++attempt.iterations;
+  }
+  if (!attempt.converged()) {
+    u_ = u_start;
+    factorisation_->valid = false;  // factors of a failed iterate: never reuse them
+    matrix_current_ = false;
+    return attempt;
+  }
+  rec->residuals = attempt.residuals;
+  if (weakest_point_ >= 0) {
+    const double m = margins_[weakest_point_];
+    rec->admissibility_margin = std::min(rec->admissibility_margin, m);
+    smallest_margin_.update(m, t_to, volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_]);
   }
   // Commit the history (eqs. 15-16) at the converged strain of every point.
   parallel_for(volume_.size(), 1024, [&](int q) { law_.update(states_[q], strain_[q], current_dt_, &states_[q]); });
-  timings_.assembly_seconds += rec.assembly_seconds;
-  timings_.solve_seconds += rec.solve_seconds;
-  records_.push_back(rec);
-  return rec;
+  return attempt;
 }
 
 void EfgModel::run(const StepObserver& observer) {

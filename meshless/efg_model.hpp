@@ -10,7 +10,9 @@
 #include <memory>
 #include <vector>
 
+#include "core/inadmissible_strain.hpp"
 #include "core/kelvin_law.hpp"
+#include "core/step_cutback.hpp"
 #include "meshless/efg_problem.hpp"
 #include "meshless/integration_points.hpp"
 #include "meshless/nodal_sparsity.hpp"
@@ -34,6 +36,10 @@ struct StepRecord {
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
   bool reused_factorisation = false;       ///< tangent unchanged (k = 0, same dt): factorisation reused
+  int substeps = 1;                        ///< converged sub-steps (more than 1 after a cut-back)
+  int cutbacks = 0;                        ///< halvings of the step
+  std::vector<core::NewtonAttempt> failed_attempts;  ///< the Newton attempts that failed, in order
+  double admissibility_margin = 1.0;       ///< smallest 1 + 2k lambda over the volume points at convergence
 };
 
 struct EfgTimings {
@@ -83,6 +89,9 @@ class EfgModel {
   /// Solve (K_n + K^alpha_n) dU = -R (eq. 20) and update U (eq. 14). Throws if dU is not finite.
   void solve();
   /// Advance one step (1-based index into problem().step_times): Newton to convergence, then commit history.
+  /// When Newton fails the step is halved and retried down to problem().min_step (core/step_cutback.hpp).
+  /// @throws core::InadmissibleStrain when a strain leaves the law's admissible range (at any iteration)
+  /// @throws core::StepCutBackFailed when even the smallest step fails, with every attempt
   StepRecord solve_step(int step);
 
   // --- results ---------------------------------------------------------------------------------------------
@@ -103,6 +112,8 @@ class EfgModel {
   const EfgOptions& options() const { return options_; }
   const std::vector<StepRecord>& steps() const { return records_; }
   const EfgTimings& timings() const { return timings_; }
+  /// The smallest 1 + 2k lambda over the converged steps so far, and where (docs/MATERIAL.md §1.5).
+  const core::SmallestMargin& smallest_margin() const { return smallest_margin_; }
   const EfgStatistics& statistics() const { return stats_; }
   const MlsShapeFunctions& shape_functions() const { return *mls_; }
   double alpha() const { return alpha_; }
@@ -112,6 +123,9 @@ class EfgModel {
 
  private:
   void update_material(double dt);
+  /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
+  /// restores the parameters U when it fails (the attempt callback of core::advance_with_cutback).
+  core::NewtonAttempt newton_step(double t_from, double t_to, StepRecord* record);
   bool use_direct_solver() const { return use_direct_; }
   /// Decide direct or iterative for the assembled pattern (setup_system); fills the estimates in stats_.
   bool choose_direct_solver();
@@ -140,6 +154,10 @@ class EfgModel {
   struct Factorisation;
   std::unique_ptr<Factorisation> factorisation_;
   double current_dt_ = 0.0;
+  double current_time_ = 0.0;     // t_{n+1} of the (sub-)step being solved, for messages
+  std::vector<double> margins_;   // 1 + 2k lambda_min at each volume point of the current iterate
+  int weakest_point_ = -1;        // the volume point with the smallest margin (-1: k = 0, not computed)
+  core::SmallestMargin smallest_margin_;
   double factorised_dt_ = -1.0;
   bool use_direct_ = true;
   int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)

@@ -23,6 +23,7 @@ EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
   p.traction = [t](const Eigen::Vector3d&) { return t; };
   p.load_scale = [program](double time) { return program.scale(time); };
   p.step_times = program.step_times;
+  p.min_step = program.min_step;
   p.output_every = c.output.every;
   return p;
 }

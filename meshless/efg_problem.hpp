@@ -65,6 +65,9 @@ struct EfgProblem {
   /// Times t_1 < t_2 < ... of the steps (t_0 = 0). dt = t_n - t_{n-1}; a first step at t = 0 has dt = 0,
   /// an instantaneous (elastic, K1) response.
   std::vector<double> step_times;
+  /// When Newton fails on a step, the step is halved and retried down to this size [s] (core/step_cutback.hpp);
+  /// 0 disables the cut-back.
+  double min_step = 0.0;
   /// Steps at which output_results() writes (the last step is always written). Empty -> every step.
   int output_every = 1;
 

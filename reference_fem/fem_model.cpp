@@ -46,6 +46,7 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
       result.sample_history.empty() ? Eigen::MatrixXd::Zero(sample_points.rows(), 3) : result.sample_history.back();
   result.vertex_displacements = vertex_displacements(solver.dof_handler(), solver.solution());
   if (options.probe_radius > 0.0) result.probe_strain = solver.strain_in_ball(options.probe_centre, options.probe_radius);
+  result.smallest_margin = solver.smallest_margin();
   result.sections = solver.section_seconds();
   result.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -66,6 +67,7 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
   parameters.degree = c.fem.degree;
   parameters.newton.tolerance = c.fem.newton_tolerance;
   parameters.newton.max_iterations = c.fem.max_newton_iterations;
+  parameters.newton.min_step = program.min_step;
 
   FemRunOptions run = options;
   if (!(run.probe_radius > 0.0)) {

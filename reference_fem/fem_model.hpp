@@ -9,6 +9,7 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include "core/inadmissible_strain.hpp"
 #include "reference_fem/problem.hpp"
 
 namespace reference_fem {
@@ -38,6 +39,7 @@ struct FemRunResult {
   std::vector<std::string> vtu_files;
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
   BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
+  core::SmallestMargin smallest_margin;  ///< smallest 1 + 2k lambda over the converged steps, and where
 };
 
 /// Solve on any tagged tet mesh (boundary ids = core::FaceTag values) with explicit conditions and

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/kelvin_law.hpp"
+#include "core/step_cutback.hpp"
 #include "core/tet_mesh.hpp"
 
 namespace reference_fem {
@@ -62,6 +63,9 @@ struct NewtonParameters {
   /// than `refactor_after` iterations. Tight enough that Newton converges as with an exact solve.
   double linear_tolerance = 1e-12;
   int refactor_after = 15;
+  /// When Newton fails on a step, the step is halved and retried down to this size [s]
+  /// (core/step_cutback.hpp); 0 disables the cut-back.
+  double min_step = 0.0;
 };
 
 struct SolverParameters {
@@ -82,6 +86,9 @@ struct StepReport {
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
   double wall_seconds = 0.0;
+  int substeps = 1;                                  ///< converged sub-steps (more than 1 after a cut-back)
+  std::vector<core::NewtonAttempt> failed_attempts;  ///< Newton attempts that failed and were cut back
+  double admissibility_margin = 1.0;  ///< smallest 1 + 2k lambda over the quadrature points at convergence
 };
 
 /// Strain in a ball around a point (e.g. under the probe), from the converged quadrature-point history.

@@ -73,7 +73,7 @@ class DirichletFunction : public Function<3> {
 struct ViscoelasticSolver::ScratchData {
   ScratchData(const Mapping<3>& mapping, const FiniteElement<3>& fe, const Quadrature<3>& quadrature,
               const Quadrature<2>& face_quadrature)
-      : fe_values(mapping, fe, quadrature, update_gradients | update_JxW_values),
+      : fe_values(mapping, fe, quadrature, update_gradients | update_JxW_values | update_quadrature_points),
         fe_face_values(mapping, fe, face_quadrature, update_values | update_quadrature_points | update_JxW_values),
         strains(quadrature.size()) {}
   ScratchData(const ScratchData& other)
@@ -94,6 +94,7 @@ struct ViscoelasticSolver::CopyData {
   Vector<double> cell_external;
   Vector<double> cell_internal;
   std::vector<types::global_dof_index> local_dof_indices;
+  core::SmallestMargin margin;  // the cell's smallest 1 + 2k lambda and where
 };
 
 ViscoelasticSolver::ViscoelasticSolver(const Triangulation<3>& triangulation, const SolverParameters& parameters,
@@ -167,9 +168,14 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
   Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(n);
   const std::size_t first = cell->active_cell_index() * n_q_points_;
+  copy.margin = core::SmallestMargin{};
   for (unsigned int q = 0; q < n_q_points_; ++q) {
-    const core::KelvinResponse response =
-        law_.update(history_[first + q].state, to_voigt(scratch.strains[q]), step_dt_);
+    const core::Vector6 strain = to_voigt(scratch.strains[q]);
+    if (law_.parameters().k != 0.0) {  // the law's admissible range (docs/MATERIAL.md §1.5)
+      const Point<3>& x = scratch.fe_values.quadrature_point(q);
+      copy.margin.update(law_.admissibility_margin(strain), step_time_, Eigen::Vector3d(x[0], x[1], x[2]), strain);
+    }
+    const core::KelvinResponse response = law_.update(history_[first + q].state, strain, step_dt_);
     for (unsigned int i = 0; i < n; ++i) B.col(i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
     const double jxw = scratch.fe_values.JxW(q);
     K.noalias() += B.transpose() * (response.tangent * B) * jxw;
@@ -214,12 +220,14 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
   Vector<double> external(dof_handler_.n_dofs()), internal(dof_handler_.n_dofs());
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
+  iterate_margin_ = core::SmallestMargin{};
   WorkStream::run(
       dof_handler_.begin_active(), dof_handler_.end(),
       [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
         local_assemble(cell, s, c);
       },
       [this, &external, &internal](const CopyData& c) {
+        iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
         internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
         zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, system_matrix_,
                                                      system_rhs_);
@@ -228,6 +236,9 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
       scratch, CopyData());
   external_force_norm_ = external.l2_norm();
   internal_force_norm_ = internal.l2_norm();
+  // Past the law's admissible range the tangent is singular and no equilibrium exists: stop, naming the point.
+  if (!(iterate_margin_.margin > 0.0))
+    throw core::InadmissibleStrain("FEM reference", t_new, iterate_margin_.point, iterate_margin_.strain, law_);
   return system_rhs_.l2_norm();
 }
 
@@ -279,41 +290,75 @@ void ViscoelasticSolver::update_history(double dt) {
 
 StepReport ViscoelasticSolver::do_time_step(double t_new) {
   const auto start = std::chrono::steady_clock::now();
-  const double dt = t_new - time_;
-  if (!(dt >= 0.0)) throw std::invalid_argument("ViscoelasticSolver: time steps must not go backwards");
+  if (!(t_new - time_ >= 0.0)) throw std::invalid_argument("ViscoelasticSolver: time steps must not go backwards");
   StepReport report;
   report.time = t_new;
+  // One Newton solve over the whole step; halved sub-steps only when it fails.
+  const core::CutBackRecord cut =
+      core::advance_with_cutback("FEM reference", time_, t_new, parameters_.newton.min_step,
+                                 [&](double, double t_to) { return newton_step(t_to, &report); });
+  report.substeps = cut.substeps;
+  report.failed_attempts = cut.failures;
+  report.wall_seconds = seconds_since(start);
+  return report;
+}
+
+core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* report) {
+  const double dt = t_new - time_;
+  core::NewtonAttempt attempt;
+  attempt.t_start = time_;
+  attempt.t_end = t_new;
+  const Vector<double> committed = solution_;  // restored when this attempt fails
   apply_dirichlet_values(t_new);
 
+  const core::DivergenceTest diverging;
   double reference = 0.0;
   for (int iteration = 0;; ++iteration) {
     const auto t_assembly = std::chrono::steady_clock::now();
     const double norm = assemble_system(t_new, dt);
-    report.assembly_seconds += seconds_since(t_assembly);
-    if (!std::isfinite(norm)) throw std::runtime_error("ViscoelasticSolver: the residual is not finite");
+    report->assembly_seconds += seconds_since(t_assembly);
     // Relative residual: scaled by the largest of the first residual of the step, the external load and
     // the internal force (reactions included), so that a step that barely changes (relaxation or creep
     // under a held load) is measured against the forces in the body, not against round-off.
     if (iteration == 0) reference = std::max({norm, external_force_norm_, internal_force_norm_});
     const double relative = reference > 0.0 ? norm / reference : 0.0;
-    report.residuals.push_back(relative);
+    attempt.residuals.push_back(std::isfinite(norm) ? relative : norm);
+    attempt.failure = diverging(attempt.residuals);
+    if (!attempt.converged()) break;
     if (relative <= parameters_.newton.tolerance) break;
-    if (iteration >= parameters_.newton.max_iterations)
-      throw std::runtime_error("ViscoelasticSolver: Newton did not converge at t = " + std::to_string(t_new) +
-                               " s (relative residual " + std::to_string(relative) + " after " +
-                               std::to_string(iteration) + " iterations)");
+    if (iteration >= parameters_.newton.max_iterations) {
+      attempt.failure = "the iteration limit (max_newton_iterations) was reached";
+      break;
+    }
     const auto t_solve = std::chrono::steady_clock::now();
     const int factorizations_before = factorizations_;
-    solve();
-    report.solve_seconds += seconds_since(t_solve);
-    report.linear_iterations += last_linear_iterations_;
-    report.factorizations += factorizations_ - factorizations_before;
-    ++report.newton_iterations;
+    try {
+      solve();
+    } catch (const std::exception& e) {  // e.g. UMFPACK on a singular tangent
+      attempt.failure = std::string("the linear solve failed: ") + e.what();
+      break;
+    }
+    if (!std::isfinite(newton_update_.l2_norm())) {
+      attempt.failure = "the linear solve gave a non-finite update";
+      break;
+    }
+    report->solve_seconds += seconds_since(t_solve);
+    report->linear_iterations += last_linear_iterations_;
+    report->factorizations += factorizations_ - factorizations_before;
+    ++report->newton_iterations;
+    ++attempt.iterations;
   }
+  if (!attempt.converged()) {
+    solution_ = committed;
+    refactor_ = true;  // the factors belong to a failed iterate
+    return attempt;
+  }
+  report->residuals = attempt.residuals;
+  report->admissibility_margin = std::min(report->admissibility_margin, iterate_margin_.margin);
+  smallest_margin_.update(iterate_margin_.margin, t_new, iterate_margin_.point, iterate_margin_.strain);
   update_history(dt);
   time_ = t_new;
-  report.wall_seconds = seconds_since(start);
-  return report;
+  return attempt;
 }
 
 void ViscoelasticSolver::run(const std::vector<double>& times, const std::function<void(const StepReport&)>& on_step) {

@@ -23,6 +23,7 @@
 #include <string>
 #include <vector>
 
+#include "core/inadmissible_strain.hpp"
 #include "core/kelvin_law.hpp"
 #include "reference_fem/point_history.hpp"
 #include "reference_fem/problem.hpp"
@@ -38,8 +39,10 @@ class ViscoelasticSolver {
   /// Distribute DoFs, build the sparsity pattern, the homogeneous constraints and the history storage.
   void setup_system();
 
-  /// Advance from the current time to t_new with Newton's method; commits the history on convergence.
-  /// Throws std::runtime_error when Newton does not converge within the iteration limit.
+  /// Advance from the current time to t_new with Newton's method; commits the history on convergence. When
+  /// Newton fails, the step is halved and retried down to parameters.newton.min_step (core/step_cutback.hpp).
+  /// @throws core::InadmissibleStrain when a strain leaves the law's admissible range (at any iteration)
+  /// @throws core::StepCutBackFailed when even the smallest step fails, with every attempt
   StepReport do_time_step(double t_new);
 
   /// Step through `times` (increasing, > current time), calling `on_step` after each converged step.
@@ -53,6 +56,8 @@ class ViscoelasticSolver {
   const dealii::Vector<double>& solution() const { return solution_; }
   const dealii::FESystem<3>& fe() const { return fe_; }
   double current_time() const { return time_; }
+  /// The smallest 1 + 2k lambda over the converged steps so far, and where (docs/MATERIAL.md §1.5).
+  const core::SmallestMargin& smallest_margin() const { return smallest_margin_; }
   /// Wall-clock totals of the TimerOutput sections (setup, assembly, solve, history, output).
   std::map<std::string, double> section_seconds() const;
   /// Volume averages of the converged stress (Voigt, tensor shears) and engineering strain at t_n.
@@ -78,6 +83,9 @@ class ViscoelasticSolver {
   double assemble_system(double t_new, double dt);
   void solve();
   void apply_dirichlet_values(double t_new);
+  /// One Newton solve from the committed state to t_new: commits on convergence, restores the solution when
+  /// it fails (the attempt of core::advance_with_cutback).
+  core::NewtonAttempt newton_step(double t_new, StepReport* report);
   void update_history(double dt);
   void local_assemble(const typename dealii::DoFHandler<3>::active_cell_iterator& cell, ScratchData& scratch,
                       CopyData& copy) const;
@@ -107,6 +115,9 @@ class ViscoelasticSolver {
   double internal_force_norm_ = 0.0;  // ||F_int|| over all rows (reactions included)
   double step_time_ = 0.0;            // t_{n+1} and dt of the step being assembled (read by workers)
   double step_dt_ = 0.0;
+  // The smallest 1 + 2k lambda of the last assembly and where (reduced over the cells by the copier).
+  core::SmallestMargin iterate_margin_;
+  core::SmallestMargin smallest_margin_;  // over the converged steps
 
   mutable std::ostringstream timer_sink_;
   mutable dealii::TimerOutput timer_;

@@ -4,6 +4,7 @@
 // linear solid, a direct quadrature of eq. 10, finite differences of update(), Hooke's law and rotation.
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
@@ -16,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "core/inadmissible_strain.hpp"
 #include "core/kelvin_law.hpp"
 
 namespace core {
@@ -403,6 +405,71 @@ TEST(KelvinLaw, BadUpdateInputsThrowInsteadOfProducingNaN) {
   corrupt.viscous_stress(2) = nan;
   EXPECT_THROW(law.update(corrupt, strain, 0.1), std::invalid_argument);
   EXPECT_NO_THROW(law.update(KelvinState{}, strain, 0.0));
+}
+
+// The admissible range (docs/MATERIAL.md §1.5): the margin is the smallest eigenvalue of dN/deps, whose
+// eigenvalues are 1 + k (lambda_i + lambda_j) in the principal frame.
+TEST(KelvinLaw, AdmissibilityMarginIsTheSmallestEigenvalueOfTheAdjustmentJacobian) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.4, 0.4);
+  for (double k : {2.0, 0.7, -1.5}) {
+    const KelvinLaw law(make_parameters(0.3, k));
+    for (int trial = 0; trial < 50; ++trial) {
+      Vector6 e;
+      for (int i = 0; i < 6; ++i) e(i) = u(rng);
+      const Eigen::VectorXcd ev = Eigen::EigenSolver<Matrix6>(law.adjusted_strain_jacobian(e)).eigenvalues();
+      EXPECT_LT(ev.imag().cwiseAbs().maxCoeff(), 1e-10);
+      EXPECT_NEAR(law.admissibility_margin(e), ev.real().minCoeff(), 1e-10) << "k = " << k;
+      // and the pairwise form 1 + k (lambda_i + lambda_j) gives all six eigenvalues
+      const Eigen::Vector3d lambda = KelvinLaw::principal_strains(e);
+      std::vector<double> expected, actual(ev.real().data(), ev.real().data() + 6);
+      for (int i = 0; i < 3; ++i)
+        for (int j = i; j < 3; ++j) expected.push_back(1.0 + k * (lambda(i) + lambda(j)));
+      std::sort(expected.begin(), expected.end());
+      std::sort(actual.begin(), actual.end());
+      for (int i = 0; i < 6; ++i) EXPECT_NEAR(actual[i], expected[i], 1e-10);
+    }
+  }
+}
+
+TEST(KelvinLaw, AdmissibleRangeMatchesThePaperOneDimensionalForm) {
+  // nu = 0 and uniaxial strain reduce the 3-D law to eq. 10: sigma = K1 N(eps) at dt = 0, so the 1-D tangent
+  // is K1 dN/deps = K1 (1 + 2 k eps), which is the margin, and it vanishes where N = eps + k eps^2 peaks.
+  const double k = 1.0;
+  const KelvinLaw law(make_parameters(0.0, k));
+  EXPECT_DOUBLE_EQ(law.limit_strain(), -0.5);
+  for (double eps : {-0.6, -0.5, -0.3, 0.0, 0.2}) {
+    const KelvinResponse r = law.update(KelvinState{}, uniaxial_strain(eps), 0.0);
+    EXPECT_NEAR(r.tangent(0, 0) / 2.0e3, 1.0 + 2.0 * k * eps, 1e-14) << eps;
+    EXPECT_NEAR(law.admissibility_margin(uniaxial_strain(eps)), std::min(1.0, 1.0 + 2.0 * k * eps), 1e-14);
+  }
+  // The smallest stress the material can carry is K1 N(-1/(2k)) = -K1/(4k): no equilibrium below it.
+  const double floor = law.update(KelvinState{}, uniaxial_strain(-0.5), 0.0).stress(0);
+  EXPECT_NEAR(floor, -2.0e3 / 4.0, 1e-9);
+  for (double eps : {-0.45, -0.55, -0.8})
+    EXPECT_GT(law.update(KelvinState{}, uniaxial_strain(eps), 0.0).stress(0), floor);
+  // k < 0 moves the limit to tension; k = 0 has none.
+  EXPECT_DOUBLE_EQ(KelvinLaw(make_parameters(0.3, -2.0)).limit_strain(), 0.25);
+  EXPECT_LT(KelvinLaw(make_parameters(0.3, -2.0)).admissibility_margin(uniaxial_strain(0.3)), 0.0);
+  EXPECT_TRUE(std::isinf(KelvinLaw(make_parameters(0.3, 0.0)).limit_strain()));
+  EXPECT_EQ(KelvinLaw(make_parameters(0.3, 0.0)).admissibility_margin(uniaxial_strain(-5.0)), 1.0);
+}
+
+TEST(KelvinLaw, InadmissibleStrainNamesModelTimePointStrainAndRemedies) {
+  const KelvinLaw law(make_parameters(0.3, 1.0));
+  Vector6 e = Vector6::Zero();
+  e << -0.55, 0.1, 0.05, 0.02, 0.0, 0.0;
+  const InadmissibleStrain error("FEM reference", 0.4, Eigen::Vector3d(0.2564, 0.0712, -0.3235), e, law);
+  const std::string message = error.what();
+  std::cout << message << "\n";
+  EXPECT_LT(error.margin(), 0.0);
+  EXPECT_NEAR(error.margin(), 1.0 + 2.0 * error.principal_strain(), 1e-14);
+  EXPECT_LT(error.principal_strain(), -0.55);  // the shear lowers the smallest principal strain below e_xx
+  EXPECT_DOUBLE_EQ(error.limit_strain(), -0.5);
+  EXPECT_DOUBLE_EQ(error.time(), 0.4);
+  for (const char* part : {"FEM reference", "t = 0.4 s", "(256.40, 71.20, -323.50) mm", "-0.5000", "-0.5500",
+                           "/load/force", "/material/k", "/load/radius"})
+    EXPECT_NE(message.find(part), std::string::npos) << part;
 }
 
 }  // namespace

@@ -1,0 +1,128 @@
+// The EFG model's step cut-back and admissibility check on a bar in uniaxial compression (nu = 0, k = 1), where
+// the 1-D law of eq. 10 holds exactly: sigma = factor * K1 * N(eps), so no compressive stress beyond
+// factor * K1 / (4k) has an equilibrium (docs/MATERIAL.md §1.5).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "core/inadmissible_strain.hpp"
+#include "core/step_cutback.hpp"
+#include "meshless/box_mesh.hpp"
+#include "meshless/efg_model.hpp"
+
+namespace meshless {
+namespace {
+
+constexpr double kLength = 0.04, kWidth = 0.01;
+// A load and an iteration limit at which a 0.5 s step of the ramp fails and a 0.25 s step converges.
+constexpr double kPressure = 1200.0;
+constexpr int kMaxIterations = 4;
+
+/// 40 x 10 x 10 mm bar, penalty-clamped at x = 0, uniform traction -pressure e_x on x = L, ramped linearly
+/// over 1 s and held, with `steps` equal steps to `total` seconds.
+EfgProblem compressed_bar(double pressure, int steps, double total) {
+  auto tagger = [](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
+    if (c.x() < 1e-12) return core::FaceTag::fixed;
+    if (c.x() > kLength - 1e-12) return core::FaceTag::load;
+    return core::FaceTag::free_surface;
+  };
+  EfgProblem p;
+  p.name = "compressed bar";
+  p.mesh = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(kLength, kWidth, kWidth), 8, 2, 2, tagger);
+  p.material = {6000.0, 12000.0, 18000.0, 0.0, 1.0};  // shipped K1, K2, eta; nu = 0 keeps it uniaxial
+  p.support.d_max = 2.0;
+  p.support.k = 6;
+  p.quadrature_order = 2;
+  p.node_spacing = kWidth / 2;
+  p.penalty_factor = 1e3;
+  p.traction = [pressure](const Eigen::Vector3d&) { return Eigen::Vector3d(-pressure, 0.0, 0.0); };
+  p.load_scale = [](double t) { return std::min(t, 1.0); };
+  for (int n = 1; n <= steps; ++n) p.step_times.push_back(total * n / steps);
+  return p;
+}
+
+TEST(EfgCutback, NoCutbackGivesExactlyPlainStepping) {
+  // 600 Pa is 40 % of the instantaneous limit K1/4: every step converges at once.
+  EfgProblem plain = compressed_bar(600.0, 4, 2.0), guarded = compressed_bar(600.0, 4, 2.0);
+  plain.min_step = 0.0;  // cut-back disabled
+  guarded.min_step = 0.5 / 64;
+  EfgModel a(std::move(plain)), b(std::move(guarded));
+  a.run();
+  b.run();
+  for (const StepRecord& s : b.steps()) {
+    EXPECT_EQ(s.substeps, 1);
+    EXPECT_EQ(s.cutbacks, 0);
+  }
+  EXPECT_EQ(a.nodal_parameters(), b.nodal_parameters());  // bitwise
+  const double strain = b.displacement_at(Eigen::Vector3d(kLength, kWidth / 2, kWidth / 2)).x() / kLength;
+  EXPECT_LT(strain, -0.05);
+  EXPECT_GT(b.smallest_margin().margin, 0.0);
+  EXPECT_LT(b.smallest_margin().margin, 1.0 + 2.0 * strain + 0.05);  // about 1 + 2 k eps
+}
+
+TEST(EfgCutback, HalvedStepsEqualPlainStepsAtTheRequestedTimes) {
+  // With the iteration limit set so that a 0.5 s step fails and a 0.25 s step converges, two requested steps
+  // become four sub-steps: the result at t = 1 s must be that of four plain 0.25 s steps.
+  EfgOptions options;
+  options.max_newton_iterations = kMaxIterations;
+  EfgProblem coarse = compressed_bar(kPressure, 2, 1.0), fine = compressed_bar(kPressure, 4, 1.0);
+  coarse.min_step = 0.25;
+  fine.min_step = 0.0;
+  EfgModel cut(std::move(coarse), options), plain(std::move(fine), options);
+  cut.run();
+  plain.run();
+  ASSERT_EQ(cut.steps().size(), 2u);
+  for (const StepRecord& s : cut.steps()) {
+    EXPECT_EQ(s.cutbacks, 1) << "step " << s.step;
+    EXPECT_EQ(s.substeps, 2) << "step " << s.step;
+    ASSERT_EQ(s.failed_attempts.size(), 1u);
+    EXPECT_NE(s.failed_attempts[0].failure.find("max_newton_iterations"), std::string::npos);
+    std::cout << "step " << s.step << ": failed attempt " << s.failed_attempts[0].failure << " after "
+              << s.failed_attempts[0].iterations << " iterations\n";
+  }
+  EXPECT_EQ(cut.nodal_parameters(), plain.nodal_parameters());  // bitwise: same sub-steps, same iterates
+}
+
+TEST(EfgCutback, StepThatFailsAtTheMinimumListsEveryAttempt) {
+  EfgOptions options;
+  options.max_newton_iterations = kMaxIterations;
+  EfgProblem p = compressed_bar(kPressure, 2, 1.0);
+  p.min_step = 0.5;  // no halving allowed
+  EfgModel model(std::move(p), options);
+  model.setup_system();
+  try {
+    model.solve_step(1);
+    FAIL() << "expected StepCutBackFailed";
+  } catch (const core::StepCutBackFailed& e) {
+    std::cout << e.what() << "\n";
+    ASSERT_EQ(e.attempts().size(), 1u);
+    EXPECT_EQ(e.attempts()[0].iterations, kMaxIterations);
+    EXPECT_NE(std::string(e.what()).find("compressed bar"), std::string::npos);
+  }
+}
+
+TEST(EfgCutback, CompressionBeyondTheLawsLimitStopsWithTheAdmissibilityError) {
+  // Instantaneous step (dt = 0, factor 1): 2000 Pa exceeds the largest compressive stress K1/(4k) = 1500 Pa.
+  EfgProblem p = compressed_bar(2000.0, 1, 1.0);
+  p.step_times = {0.0};
+  p.load_scale = [](double) { return 1.0; };
+  p.min_step = 0.01;
+  EfgModel model(std::move(p));
+  model.setup_system();
+  try {
+    model.solve_step(1);
+    FAIL() << "expected InadmissibleStrain";
+  } catch (const core::InadmissibleStrain& e) {
+    std::cout << e.what() << "\n";
+    EXPECT_LE(e.margin(), 0.0);
+    EXPECT_LE(e.principal_strain(), -0.5);
+    EXPECT_DOUBLE_EQ(e.limit_strain(), -0.5);
+    EXPECT_EQ(e.time(), 0.0);
+    EXPECT_TRUE((e.point().array() >= -1e-12).all() && e.point().x() <= kLength && e.point().y() <= kWidth);
+    EXPECT_NE(std::string(e.what()).find("meshless (EFG) model 'compressed bar'"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace meshless
