@@ -10,17 +10,21 @@ double critical_principal_strain(const Vector6& strain, double k) {
   return k >= 0.0 ? lambda.minCoeff() : lambda.maxCoeff();
 }
 
-std::string describe(const std::string& model, double time, const Eigen::Vector3d& point, const Vector6& strain,
-                     double k, double margin, double principal, double limit) {
+std::string describe(const std::string& model, double time, const Eigen::Vector3d& point,
+                     const Vector6& strain, double k, double margin, double principal, double limit) {
   const Eigen::Vector3d mm = 1e3 * point;
   return fmt::format(
-      "{}: at t = {:.6g} s the strain at ({:.2f}, {:.2f}, {:.2f}) mm left the admissible range of the adjustment "
+      "{}: at t = {:.6g} s the strain at ({:.2f}, {:.2f}, {:.2f}) mm left the admissible range of the "
+      "adjustment "
       "function N(eps) = eps + k eps.eps (k = {:g}): its {} principal strain is {:.4f}, beyond the limit "
       "-1/(2k) = {:.4f}, so 1 + 2k lambda = {:.3g} <= 0 (strain xx, yy, zz, gamma_xy, gamma_yz, gamma_zx = "
-      "{:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}). There the material tangent is singular and no equilibrium "
+      "{:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}). There the material tangent is singular and no "
+      "equilibrium "
       "exists past it, so a smaller time step cannot help. To stay inside the range: lower the force "
-      "(/load/force), lower |k| (/material/k), or spread the force over a larger patch (/load/radius); a pointed "
-      "or thin part of the surface under the probe concentrates the strain (docs/MATERIAL.md, admissible range)",
+      "(/load/force), lower |k| (/material/k), or spread the force over a larger patch (/load/radius); a "
+      "pointed "
+      "or thin part of the surface under the probe concentrates the strain (docs/MATERIAL.md, admissible "
+      "range)",
       model, time, mm.x(), mm.y(), mm.z(), k, k > 0.0 ? "smallest" : "largest", principal, limit, margin,
       strain[0], strain[1], strain[2], strain[3], strain[4], strain[5]);
 }
@@ -29,7 +33,8 @@ std::string describe(const std::string& model, double time, const Eigen::Vector3
 
 InadmissibleStrain::InadmissibleStrain(const std::string& model, double time, const Eigen::Vector3d& point,
                                        const Vector6& strain, const KelvinLaw& law)
-    : std::runtime_error(describe(model, time, point, strain, law.parameters().k, law.admissibility_margin(strain),
+    : std::runtime_error(describe(model, time, point, strain, law.parameters().k,
+                                  law.admissibility_margin(strain),
                                   critical_principal_strain(strain, law.parameters().k), law.limit_strain())),
       model_(model),
       time_(time),

@@ -18,17 +18,17 @@ class InadmissibleStrain : public std::runtime_error {
   /// @param point  the integration point [m] (the message reports mm)
   /// @param strain the engineering Voigt strain there
   /// @param law    the law whose k sets the limit
-  InadmissibleStrain(const std::string& model, double time, const Eigen::Vector3d& point, const Vector6& strain,
-                     const KelvinLaw& law);
+  InadmissibleStrain(const std::string& model, double time, const Eigen::Vector3d& point,
+                     const Vector6& strain, const KelvinLaw& law);
 
   const std::string& model() const { return model_; }
-  double time() const { return time_; }                       ///< [s]
-  const Eigen::Vector3d& point() const { return point_; }     ///< [m]
-  const Vector6& strain() const { return strain_; }           ///< engineering Voigt
+  double time() const { return time_; }                    ///< [s]
+  const Eigen::Vector3d& point() const { return point_; }  ///< [m]
+  const Vector6& strain() const { return strain_; }        ///< engineering Voigt
   double k() const { return k_; }
-  double margin() const { return margin_; }                   ///< min_i 1 + 2 k lambda_i (<= 0)
-  double principal_strain() const { return principal_; }      ///< the lambda_i that set the margin
-  double limit_strain() const { return limit_; }              ///< -1/(2k)
+  double margin() const { return margin_; }               ///< min_i 1 + 2 k lambda_i (<= 0)
+  double principal_strain() const { return principal_; }  ///< the lambda_i that set the margin
+  double limit_strain() const { return limit_; }          ///< -1/(2k)
 
  private:
   std::string model_;
@@ -45,8 +45,8 @@ namespace core {
 /// The smallest admissibility margin min_i (1 + 2 k lambda_i) a model met in its converged states, and where:
 /// how close a run came to the limit (reported in timings.json).
 struct SmallestMargin {
-  double margin = 1.0;  ///< 1 when k = 0 or before the first step
-  double time = 0.0;    ///< [s]
+  double margin = 1.0;                              ///< 1 when k = 0 or before the first step
+  double time = 0.0;                                ///< [s]
   Eigen::Vector3d point = Eigen::Vector3d::Zero();  ///< [m]
   Vector6 strain = Vector6::Zero();                 ///< engineering Voigt
 

@@ -13,12 +13,14 @@ std::string DivergenceTest::operator()(const std::vector<double>& residuals) con
   if (!std::isfinite(last)) return "the residual is not finite";
   const double smallest = *std::min_element(residuals.begin(), residuals.end());
   if (last > growth_limit * smallest)
-    return fmt::format("diverging: the residual grew {:.3g}-fold over the smallest of the step", last / smallest);
+    return fmt::format("diverging: the residual grew {:.3g}-fold over the smallest of the step",
+                       last / smallest);
   const int n = static_cast<int>(residuals.size());
   if (n > max_increases) {
     bool growing = true;
     for (int i = n - max_increases; i < n; ++i) growing = growing && residuals[i] > residuals[i - 1];
-    if (growing) return fmt::format("diverging: the residual grew in {} consecutive iterations", max_increases);
+    if (growing)
+      return fmt::format("diverging: the residual grew in {} consecutive iterations", max_increases);
   }
   return {};
 }
@@ -28,17 +30,20 @@ namespace {
 std::string describe(const std::string& model, double t_start, double t_end, double min_step,
                      const std::vector<NewtonAttempt>& attempts) {
   std::string text = fmt::format(
-      "{}: Newton did not converge on the step from t = {:.6g} s to t = {:.6g} s, even after halving it to the "
+      "{}: Newton did not converge on the step from t = {:.6g} s to t = {:.6g} s, even after halving it to "
+      "the "
       "minimum step of {:.3g} s (/time/min_step). Attempts:",
       model, t_start, t_end, min_step);
   for (const NewtonAttempt& a : attempts) {
-    text += fmt::format("\n  t = {:.6g} -> {:.6g} s (dt = {:.3g} s): {} after {} iterations", a.t_start, a.t_end,
-                        a.t_end - a.t_start, a.failure, a.iterations);
+    text += fmt::format("\n  t = {:.6g} -> {:.6g} s (dt = {:.3g} s): {} after {} iterations", a.t_start,
+                        a.t_end, a.t_end - a.t_start, a.failure, a.iterations);
     if (!a.residuals.empty()) text += fmt::format(", last relative residual {:.3g}", a.residuals.back());
   }
   text +=
-      "\nThe load changes too fast for the time step, or the body has no equilibrium nearby. What to change: more "
-      "time steps (/time/steps) or a smaller /time/min_step, a slower load ramp (/load/ramp_time), a lower force "
+      "\nThe load changes too fast for the time step, or the body has no equilibrium nearby. What to change: "
+      "more "
+      "time steps (/time/steps) or a smaller /time/min_step, a slower load ramp (/load/ramp_time), a lower "
+      "force "
       "(/load/force) or k (/material/k), or a larger load patch (/load/radius)";
   return text;
 }

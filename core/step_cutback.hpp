@@ -4,8 +4,9 @@
 // A model advances from t_n to t_{n+1} with Newton's method. When an attempt fails (too many iterations, a
 // diverging or non-finite residual, a failed linear solve), advance_with_cutback() halves the step and tries
 // again from t_n, down to a minimum step; sub-steps then run at that size until t_{n+1} is reached. When the
-// minimum step fails too it throws StepCutBackFailed with every attempt. A strain outside the law's admissible
-// range (core::InadmissibleStrain) is not a Newton failure: it propagates at once, because no step size helps.
+// minimum step fails too it throws StepCutBackFailed with every attempt. A strain outside the law's
+// admissible range (core::InadmissibleStrain) is not a Newton failure: it propagates at once, because no step
+// size helps.
 //
 // When the first attempt converges, advance_with_cutback() makes exactly one call, attempt(t_n, t_{n+1}), so
 // results at the requested times are those of plain stepping.
@@ -18,9 +19,9 @@ namespace core {
 
 /// One Newton solve of a step or sub-step, and how it ended.
 struct NewtonAttempt {
-  double t_start = 0.0;  ///< [s]
-  double t_end = 0.0;    ///< [s]
-  int iterations = 0;    ///< linear solves
+  double t_start = 0.0;           ///< [s]
+  double t_end = 0.0;             ///< [s]
+  int iterations = 0;             ///< linear solves
   std::vector<double> residuals;  ///< relative residual before each solve (and the converged one)
   std::string failure;            ///< why Newton stopped; empty when it converged
   bool converged() const { return failure.empty(); }
@@ -37,10 +38,10 @@ struct DivergenceTest {
 
 /// How a requested step was completed.
 struct CutBackRecord {
-  int substeps = 0;                      ///< converged (sub-)steps; 1 without cut-back
-  int cutbacks = 0;                      ///< halvings of the step
-  double smallest_step = 0.0;            ///< [s] size of the smallest converged sub-step
-  std::vector<NewtonAttempt> failures;   ///< the attempts that failed, in order
+  int substeps = 0;                     ///< converged (sub-)steps; 1 without cut-back
+  int cutbacks = 0;                     ///< halvings of the step
+  double smallest_step = 0.0;           ///< [s] size of the smallest converged sub-step
+  std::vector<NewtonAttempt> failures;  ///< the attempts that failed, in order
 };
 
 /// Thrown when a step fails even at the minimum step. Names the model, the step and every attempt.

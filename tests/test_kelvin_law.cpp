@@ -422,7 +422,8 @@ TEST(KelvinLaw, AdmissibilityMarginIsTheSmallestEigenvalueOfTheAdjustmentJacobia
       EXPECT_NEAR(law.admissibility_margin(e), ev.real().minCoeff(), 1e-10) << "k = " << k;
       // and the pairwise form 1 + k (lambda_i + lambda_j) gives all six eigenvalues
       const Eigen::Vector3d lambda = KelvinLaw::principal_strains(e);
-      std::vector<double> expected, actual(ev.real().data(), ev.real().data() + 6);
+      const Eigen::VectorXd real = ev.real();
+      std::vector<double> expected, actual(real.data(), real.data() + 6);
       for (int i = 0; i < 3; ++i)
         for (int j = i; j < 3; ++j) expected.push_back(1.0 + k * (lambda(i) + lambda(j)));
       std::sort(expected.begin(), expected.end());

@@ -1,8 +1,8 @@
 // Robustness on a real organ: configs/lung_stl_tip.json presses the shipped lower lobe on its most pointed
 // convex vertex (apex fixed, shipped material, k = 1) with a force at which plain Newton stepping failed in
 // both models. Each model must now either finish (cutting steps back where Newton failed) or stop with the
-// law's admissibility error (core::InadmissibleStrain); a bare non-convergence (core::StepCutBackFailed) or any
-// other error fails the test. Skipped when ../shared/data/lung is absent.
+// law's admissibility error (core::InadmissibleStrain); a bare non-convergence (core::StepCutBackFailed) or
+// any other error fails the test. Skipped when ../shared/data/lung is absent.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,8 +24,9 @@ const std::string kStl = std::string(TISSUE_SHARED_DATA_DIR) + "/lung/lower_lobe
 
 core::Case tip_case() { return core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_stl_tip.json"); }
 
-#define SKIP_WITHOUT_STL() \
-  if (!std::filesystem::exists(kStl)) GTEST_SKIP() << "real lung STL not found at " << kStl << " (../shared absent)"
+#define SKIP_WITHOUT_STL()            \
+  if (!std::filesystem::exists(kStl)) \
+  GTEST_SKIP() << "real lung STL not found at " << kStl << " (../shared absent)"
 
 /// Pointedness of a closed, outward-oriented surface at each vertex: the angle defect 2 pi - sum of the
 /// triangle angles there (the discrete Gaussian curvature), with the area-weighted outward vertex normal, and
@@ -80,7 +81,7 @@ TEST(LungTip, ProbeSitsOnTheMostPointedConvexVertexAndPressesInward) {
   std::cout << "most pointed convex vertex " << tip << " at (" << x.transpose() * 1e3 << ") mm: angle defect "
             << k.defect[tip] << " rad, outward normal (" << k.normal[tip].transpose() << ")\n";
   EXPECT_NEAR(k.defect[tip], 2.334, 1e-3);
-  EXPECT_LT((x - c.load.point).norm(), 1e-5);  // the config's probe point, to 0.01 mm
+  EXPECT_LT((x - c.load.point).norm(), 1e-5);                        // the config's probe point, to 0.01 mm
   EXPECT_GT(-c.load.force.normalized().dot(k.normal[tip]), 0.9999);  // along the inward normal
   EXPECT_NEAR(c.load.force.norm(), 0.3, 1e-3);
 }

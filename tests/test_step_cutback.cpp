@@ -58,7 +58,7 @@ TEST(StepCutback, HalvesUntilNewtonConvergesAndEndsExactlyAtTheRequestedTime) {
   ASSERT_EQ(r.failures.size(), 2u);
   EXPECT_NEAR(r.failures[0].t_end - r.failures[0].t_start, 0.2, 1e-15);
   EXPECT_NEAR(r.failures[1].t_end - r.failures[1].t_start, 0.1, 1e-15);
-  ASSERT_EQ(m.calls.size(), 6u);  // 0.2 and 0.1 fail, then four sub-steps of 0.05
+  ASSERT_EQ(m.calls.size(), 6u);          // 0.2 and 0.1 fail, then four sub-steps of 0.05
   EXPECT_EQ(m.calls.back().second, 0.4);  // the last sub-step ends at t_end, not at a rounded sum
   EXPECT_EQ(m.committed, 0.4);
   EXPECT_NEAR(r.smallest_step, 0.05, 1e-15);
@@ -77,9 +77,10 @@ TEST(StepCutback, FailsWithEveryAttemptBelowTheMinimumStep) {
     ASSERT_EQ(e.attempts().size(), 3u);
     EXPECT_EQ(m.committed, 0.0);
     EXPECT_DOUBLE_EQ(e.min_step(), 0.04);
-    for (const char* part : {"meshless (EFG) model 'x'", "t = 0 s to t = 0.2 s", "/time/min_step",
-                             "t = 0 -> 0.05 s (dt = 0.05 s): the iteration limit was reached after 3 iterations",
-                             "last relative residual 2", "/time/steps", "/load/force"})
+    for (const char* part :
+         {"meshless (EFG) model 'x'", "t = 0 s to t = 0.2 s", "/time/min_step",
+          "t = 0 -> 0.05 s (dt = 0.05 s): the iteration limit was reached after 3 iterations",
+          "last relative residual 2", "/time/steps", "/load/force"})
       EXPECT_NE(message.find(part), std::string::npos) << part;
   }
 }

@@ -22,7 +22,8 @@ namespace {
 
 const std::string& input_file() {
   static const std::string file =
-      (std::filesystem::temp_directory_path() / ("tissue_fuzz_stl_" + std::to_string(getpid()) + ".stl")).string();
+      (std::filesystem::temp_directory_path() / ("tissue_fuzz_stl_" + std::to_string(getpid()) + ".stl"))
+          .string();
   return file;
 }
 
