@@ -169,7 +169,8 @@ Case parse_case_text(const std::string& text, const std::string& file) {
   nlohmann::json document;
   try {
     document = nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/false);
-  } catch (const nlohmann::json::parse_error& e) {
+  } catch (const nlohmann::json::exception& e) {
+    // parse_error, and out_of_range for a number beyond double (e.g. 1e999)
     throw CaseError(file, "", fmt::format("expected valid JSON: {}", e.what()));
   }
   return parse_case(document, file);

@@ -15,6 +15,7 @@
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_mesh.hpp"
 #include "core/gmsh_session.hpp"
+#include "core/stl_file.hpp"
 #include "core/stl_solid.hpp"
 
 namespace core {
@@ -173,6 +174,8 @@ PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spe
 /// Read, check and orient the STL surface (metres). Errors point at /geometry/stl_file.
 TriangleSurface load_stl_surface(const Case& c) {
   const std::string& file = c.geometry.stl_file;
+  if (const std::string problem = check_stl_layout(file); !problem.empty())
+    throw CaseError(c.source_file, "/geometry/stl_file", problem);
   try {
     gmsh::merge(file);
   } catch (...) {
