@@ -1,0 +1,141 @@
+// The FEM reference's step cut-back and admissibility check on a bar in uniaxial compression (nu = 0, k = 1),
+// where the 1-D law of eq. 10 holds exactly: sigma = factor * K1 * N(eps), so no compressive stress beyond
+// factor * K1 / (4k) has an equilibrium (docs/MATERIAL.md §1.5). The same bar as tests/test_efg_cutback.cpp.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <vector>
+
+#include "core/inadmissible_strain.hpp"
+#include "core/step_cutback.hpp"
+#include "meshless/box_mesh.hpp"
+#include "reference_fem/fem_model.hpp"
+
+namespace reference_fem {
+namespace {
+
+constexpr double kLength = 0.04, kWidth = 0.01;
+// 87 % of the instantaneous limit K1/(4k) = 1500 Pa: Newton needs more iterations on longer steps.
+constexpr double kPressure = 1300.0;
+
+core::TetMesh bar_mesh() {
+  auto tagger = [](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
+    if (c.x() < 1e-12) return core::FaceTag::fixed;
+    if (c.x() > kLength - 1e-12) return core::FaceTag::load;
+    return core::FaceTag::free_surface;
+  };
+  return meshless::make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d(kLength, kWidth, kWidth), 4, 1, 1, tagger);
+}
+
+SolverParameters bar_parameters(int max_iterations, double min_step) {
+  SolverParameters p;
+  p.material = {6000.0, 12000.0, 18000.0, 0.0, 1.0};  // shipped K1, K2, eta; nu = 0 keeps it uniaxial
+  p.degree = 1;
+  p.newton.max_iterations = max_iterations;
+  p.newton.min_step = min_step;
+  return p;
+}
+
+/// Clamped at x = 0 (with nu = 0 the clamp does not constrain the uniaxial state), traction -pressure e_x on
+/// x = L ramped linearly over 1 s and held (or applied at once when `ramp` is false).
+BoundaryConditions compression(double pressure, bool ramp) {
+  BoundaryConditions bc;
+  bc.dirichlet.push_back(DirichletCondition{});
+  TractionCondition push;
+  push.traction = Eigen::Vector3d(-pressure, 0.0, 0.0);
+  if (ramp) push.scale = [](double t) { return std::min(t, 1.0); };
+  bc.tractions.push_back(push);
+  return bc;
+}
+
+const Eigen::MatrixXd kTip = (Eigen::MatrixXd(1, 3) << kLength, kWidth / 2, kWidth / 2).finished();
+
+FemRunResult run(double pressure, const std::vector<double>& times, int max_iterations, double min_step,
+                 bool ramp = true) {
+  return solve_on_mesh(bar_mesh(), bar_parameters(max_iterations, min_step), compression(pressure, ramp), times,
+                       kTip);
+}
+
+/// An iteration limit at which one 1 s step of the ramp fails while two 0.5 s steps converge, measured.
+int limit_where_only_half_steps_converge() {
+  static const int limit = [] {
+    const FemRunResult one = run(kPressure, {1.0}, 100, 0.0), two = run(kPressure, {0.5, 1.0}, 100, 0.0);
+    const int n1 = one.steps[0].newton_iterations;
+    const int n2 = std::max(two.steps[0].newton_iterations, two.steps[1].newton_iterations);
+    std::cout << "Newton iterations: one 1 s step " << n1 << ", two 0.5 s steps " << two.steps[0].newton_iterations
+              << " and " << two.steps[1].newton_iterations << "\n";
+    EXPECT_GT(n1, n2) << "the bar no longer needs a cut-back: raise kPressure";
+    return n2;
+  }();
+  return limit;
+}
+
+TEST(FemCutback, NoCutbackGivesExactlyPlainStepping) {
+  // 600 Pa is 40 % of the instantaneous limit: every step converges at once.
+  const std::vector<double> times = {0.5, 1.0, 1.5, 2.0};
+  const FemRunResult plain = run(600.0, times, 25, 0.0), guarded = run(600.0, times, 25, 0.5 / 64);
+  for (const StepReport& s : guarded.steps) {
+    EXPECT_EQ(s.substeps, 1);
+    EXPECT_TRUE(s.failed_attempts.empty());
+  }
+  EXPECT_EQ(plain.vertex_displacements, guarded.vertex_displacements);  // bitwise
+  const double strain = guarded.sample_displacements(0, 0) / kLength;
+  std::cout << "tip strain " << strain << ", smallest margin " << guarded.smallest_margin.margin << "\n";
+  EXPECT_LT(strain, -0.05);
+  // uniaxial: the margin is 1 + 2 k eps_xx, the same at every point
+  EXPECT_NEAR(guarded.smallest_margin.margin, 1.0 + 2.0 * strain, 1e-6);
+  EXPECT_DOUBLE_EQ(guarded.smallest_margin.time, 2.0);  // creep: the strain grows while the load is held
+}
+
+TEST(FemCutback, HalvedStepEqualsPlainHalfStepsAtTheRequestedTimes) {
+  const int limit = limit_where_only_half_steps_converge();
+  const FemRunResult cut = run(kPressure, {1.0}, limit, 0.5), plain = run(kPressure, {0.5, 1.0}, limit, 0.0);
+  ASSERT_EQ(cut.steps.size(), 1u);
+  const StepReport& s = cut.steps[0];
+  EXPECT_EQ(s.substeps, 2);
+  EXPECT_DOUBLE_EQ(s.time, 1.0);
+  ASSERT_EQ(s.failed_attempts.size(), 1u);
+  EXPECT_EQ(s.failed_attempts[0].t_start, 0.0);
+  EXPECT_EQ(s.failed_attempts[0].t_end, 1.0);
+  EXPECT_NE(s.failed_attempts[0].failure.find("max_newton_iterations"), std::string::npos);
+  EXPECT_GT(s.failed_attempts[0].residuals.back(), 1e-8);
+  // The failed attempt leaves no trace: the sub-steps are the plain half steps.
+  EXPECT_EQ(cut.vertex_displacements, plain.vertex_displacements);  // bitwise
+  EXPECT_EQ(cut.smallest_margin.margin, plain.smallest_margin.margin);
+}
+
+TEST(FemCutback, StepThatFailsAtTheMinimumListsEveryAttempt) {
+  const int limit = limit_where_only_half_steps_converge();
+  try {
+    run(kPressure, {1.0}, limit, 1.0);  // no halving allowed
+    FAIL() << "expected StepCutBackFailed";
+  } catch (const core::StepCutBackFailed& e) {
+    std::cout << e.what() << "\n";
+    ASSERT_EQ(e.attempts().size(), 1u);
+    EXPECT_EQ(e.attempts()[0].iterations, limit);
+    EXPECT_NE(std::string(e.what()).find("FEM reference"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("/time/min_step"), std::string::npos);
+  }
+}
+
+TEST(FemCutback, CompressionBeyondTheLawsLimitStopsWithTheAdmissibilityError) {
+  // Instantaneous step (dt = 0, factor 1): 2000 Pa exceeds the largest compressive stress K1/(4k) = 1500 Pa.
+  try {
+    run(2000.0, {0.0}, 25, 0.01, /*ramp=*/false);
+    FAIL() << "expected InadmissibleStrain";
+  } catch (const core::InadmissibleStrain& e) {
+    std::cout << e.what() << "\n";
+    EXPECT_LE(e.margin(), 0.0);
+    EXPECT_LE(e.principal_strain(), -0.5);
+    EXPECT_DOUBLE_EQ(e.limit_strain(), -0.5);
+    EXPECT_EQ(e.time(), 0.0);
+    EXPECT_TRUE((e.point().array() >= 0.0).all() && e.point().x() <= kLength && e.point().y() <= kWidth &&
+                e.point().z() <= kWidth);
+    EXPECT_NE(std::string(e.what()).find("FEM reference"), std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace reference_fem
