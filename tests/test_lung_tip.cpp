@@ -5,10 +5,14 @@
 // any other error fails the test. Skipped when ../shared/data/lung is absent.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
+#include <utility>
 #include <vector>
 
 #include "core/case.hpp"
@@ -84,6 +88,85 @@ TEST(LungTip, ProbeSitsOnTheMostPointedConvexVertexAndPressesInward) {
   EXPECT_LT((x - c.load.point).norm(), 1e-5);                        // the config's probe point, to 0.01 mm
   EXPECT_GT(-c.load.force.normalized().dot(k.normal[tip]), 0.9999);  // along the inward normal
   EXPECT_NEAR(c.load.force.norm(), 0.3, 1e-3);
+}
+
+/// How a model ended on the tip case: it finished every step (cutting steps back where Newton failed), or it
+/// stopped with the law's admissibility error. Anything else (StepCutBackFailed, another exception) propagates
+/// and fails the test.
+struct Outcome {
+  bool finished = false;
+  double smallest_margin = 1.0;     // of the run when finished
+  int cutbacks = 0;                 // failed Newton attempts that were cut back
+  std::optional<core::InadmissibleStrain> stop;
+};
+
+/// The admissibility error's data must describe a real point of the lobe, in the requested time range, past the
+/// limit -1/(2k) = -0.5 of the shipped k = 1.
+void expect_admissibility_stop(const core::InadmissibleStrain& e, const core::TriangleSurface& s, double t_end,
+                               const std::string& model) {
+  std::cout << e.what() << "\n";
+  EXPECT_EQ(e.model().rfind(model, 0), 0u) << e.model();
+  EXPECT_LE(e.margin(), 0.0);
+  EXPECT_DOUBLE_EQ(e.limit_strain(), -0.5);
+  EXPECT_LE(e.principal_strain(), -0.5);
+  EXPECT_NEAR(e.margin(), 1.0 + 2.0 * e.principal_strain(), 1e-12);
+  EXPECT_GT(e.time(), 0.0);
+  EXPECT_LE(e.time(), t_end);
+  const Eigen::Vector3d lo = s.vertices.colwise().minCoeff().transpose(), hi = s.vertices.colwise().maxCoeff().transpose();
+  EXPECT_TRUE((e.point().array() >= lo.array() - 1e-9).all() && (e.point().array() <= hi.array() + 1e-9).all())
+      << "the point lies outside the lobe's bounding box";
+  for (const char* remedy : {"/load/force", "/material/k", "/load/radius"})
+    EXPECT_NE(std::string(e.what()).find(remedy), std::string::npos) << remedy;
+}
+
+// Both models on the tip case at the force in the config (0.3 N), where plain Newton stepping failed in both:
+// the FEM with "Newton did not converge" and the EFG with a relative residual of 8e13.
+TEST(LungTip, EachModelFinishesByCutBackOrStopsWithTheAdmissibilityError) {
+  SKIP_WITHOUT_STL();
+  const core::Case c = tip_case();
+  const core::Geometry g = core::build_geometry(c, core::GeometryOptions{});
+  const double t_end = c.time.total;
+
+  Outcome efg;
+  {
+    meshless::EfgModel model(meshless::problem_from_case(c, g));
+    try {
+      model.run();
+      efg.finished = true;
+      efg.smallest_margin = model.smallest_margin().margin;
+      for (const meshless::StepRecord& s : model.steps()) {
+        efg.cutbacks += s.cutbacks;
+        EXPECT_LE(s.residuals.back(), model.options().newton_tolerance) << "step " << s.step;
+      }
+      EXPECT_EQ(model.steps().size(), static_cast<std::size_t>(c.time.steps));
+    } catch (const core::InadmissibleStrain& e) {
+      efg.stop = e;
+    }
+  }
+  Outcome fem;
+  try {
+    const reference_fem::FemRunResult r = reference_fem::run_case(c, g);
+    fem.finished = true;
+    fem.smallest_margin = r.smallest_margin.margin;
+    for (const reference_fem::StepReport& s : r.steps) fem.cutbacks += static_cast<int>(s.failed_attempts.size());
+    EXPECT_EQ(r.steps.size(), static_cast<std::size_t>(c.time.steps));
+    EXPECT_TRUE(r.sample_displacements.allFinite());
+  } catch (const core::InadmissibleStrain& e) {
+    fem.stop = e;
+  }
+
+  for (const auto& [name, o] : {std::pair<std::string, const Outcome&>{"meshless (EFG)", efg}, {"FEM reference", fem}}) {
+    if (o.finished) {
+      std::cout << name << ": finished, " << o.cutbacks << " cut-backs, smallest 1 + 2k lambda " << o.smallest_margin
+                << "\n";
+      EXPECT_GT(o.smallest_margin, 0.0) << name;
+      EXPECT_LT(o.smallest_margin, 1.0) << name;  // k = 1 under compression: the margin moved
+    } else {
+      ASSERT_TRUE(o.stop.has_value());
+      std::cout << name << ": stopped at t = " << o.stop->time() << " s\n";
+      expect_admissibility_stop(*o.stop, g.surface, t_end, name);
+    }
+  }
 }
 
 }  // namespace
