@@ -10,6 +10,7 @@
 
 #include "core/inadmissible_strain.hpp"
 #include "core/step_cutback.hpp"
+#include "experiments/model_result.hpp"
 #include "meshless/box_mesh.hpp"
 #include "reference_fem/fem_model.hpp"
 
@@ -104,6 +105,38 @@ TEST(FemCutback, HalvedStepEqualsPlainHalfStepsAtTheRequestedTimes) {
   // The failed attempt leaves no trace: the sub-steps are the plain half steps.
   EXPECT_EQ(cut.vertex_displacements, plain.vertex_displacements);  // bitwise
   EXPECT_EQ(cut.smallest_margin.margin, plain.smallest_margin.margin);
+}
+
+TEST(FemCutback, TimingsJsonRecordsTheCutBackAndTheSmallestMargin) {
+  // A cut-back step followed by a plain one, through timings_json (the per-step fields as `tissue solve fem`
+  // fills them in experiments/solve_commands.cpp).
+  const int limit = limit_where_only_half_steps_converge();
+  const FemRunResult f = run(kPressure, {1.0, 1.05}, limit, 0.5);  // held longer, it creeps past the limit
+  experiments::ModelResult r;
+  r.model = "fem";
+  for (const StepReport& s : f.steps)
+    r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
+                       s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin});
+  const nlohmann::json j = experiments::timings_json(r);
+  EXPECT_EQ(j["cutbacks_total"], 1);
+  ASSERT_EQ(j["steps"].size(), 2u);
+  const nlohmann::json& first = j["steps"][0];
+  EXPECT_EQ(first["substeps"], 2);
+  EXPECT_EQ(first["cutbacks"], 1);
+  ASSERT_EQ(first["failed_attempts"].size(), 1u);
+  EXPECT_EQ(first["failed_attempts"][0]["t_start"], 0.0);
+  EXPECT_EQ(first["failed_attempts"][0]["t_end"], 1.0);
+  EXPECT_EQ(first["failed_attempts"][0]["newton_iterations"], limit);
+  EXPECT_EQ(first["failed_attempts"][0]["relative_residuals"].size(), static_cast<std::size_t>(limit) + 1);
+  EXPECT_EQ(j["steps"][1]["cutbacks"], 0);
+  EXPECT_EQ(j["steps"][1]["substeps"], 1);
+  // The run's smallest margin is that of the solver (over the converged states), here at the last step, and it
+  // is 1 + 2k eps of the uniaxial strain.
+  const double strain = f.sample_displacements(0, 0) / kLength;
+  std::cout << "timings.json: min_one_plus_2k_lambda " << j["min_one_plus_2k_lambda"] << ", strain " << strain << "\n";
+  EXPECT_DOUBLE_EQ(j["min_one_plus_2k_lambda"].get<double>(), f.smallest_margin.margin);
+  EXPECT_DOUBLE_EQ(f.smallest_margin.time, 1.05);
+  EXPECT_NEAR(j["min_one_plus_2k_lambda"].get<double>(), 1.0 + 2.0 * strain, 1e-6);
 }
 
 TEST(FemCutback, StepThatFailsAtTheMinimumListsEveryAttempt) {
