@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -135,6 +136,18 @@ TEST_F(BadCase, StlThatIsNotASurface) {
   write("garbage.stl", "this is not an STL file\n");
   base_["geometry"] = {{"source", "stl"}, {"stl_file", "garbage.stl"}, {"length_unit", "mm"}, {"mesh_size", 10.0}};
   expect_error(write_case(base_), {"/geometry/stl_file", "garbage.stl"});
+}
+
+TEST_F(BadCase, TruncatedBinaryStl) {
+  // A binary STL whose header announces 1,000,000 triangles (50 MB) but holds one: rejected before Gmsh
+  // reserves memory for the announced count.
+  std::string bytes(80, ' ');
+  const std::uint32_t count = 1000000;
+  for (int i = 0; i < 4; ++i) bytes += static_cast<char>((count >> (8 * i)) & 0xff);
+  bytes += std::string(50, '\0');
+  write("truncated.stl", bytes);
+  base_["geometry"] = {{"source", "stl"}, {"stl_file", "truncated.stl"}, {"length_unit", "mm"}, {"mesh_size", 10.0}};
+  expect_error(write_case(base_), {"/geometry/stl_file", "1000000 triangles", "50000084 bytes", "has 134 bytes"});
 }
 
 TEST_F(BadCase, MissingStlFile) {
