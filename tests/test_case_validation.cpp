@@ -77,6 +77,11 @@ TEST_F(BadCase, MalformedJson) {
   expect_error(write("case.json", "{ \"name\": \"x\", \"material\": { \"K1\": 1, } "), {"expected valid JSON"});
 }
 
+TEST_F(BadCase, NumberBeyondDouble) {
+  // nlohmann::json reports 1e999 as out_of_range, not as a parse error (found by fuzzing the case reader).
+  expect_error(write("case.json", R"({"name": "x", "material": {"k": 1e999}})"), {"expected valid JSON", "1e999"});
+}
+
 TEST_F(BadCase, UnknownKey) {
   base_["material"]["K3"] = 5.0;
   expect_error(write_case(base_), {"/material/K3", "unknown key", "K1"});
