@@ -58,6 +58,9 @@ struct CutSpec {
   std::vector<Eigen::Vector3d> polyline;  ///< [m]
   double depth = 0.0;                     ///< [m]
   Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();  ///< unit
+  /// Progressive incision (`tissue cut`): the cut advances along its polyline in this many equal increments,
+  /// one at the start of each of the first `steps` time steps. Solves that are not progressive cut at once.
+  int steps = 1;
 };
 
 struct MeshlessSpec {
@@ -67,6 +70,8 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp); default: node_spacing
+  double front_transition = 0.012;
 };
 
 struct FemSpec {

@@ -22,7 +22,6 @@ namespace {
 
 constexpr double kSnapTolerance = 0.010;          // points meant to be on the surface: within 10 mm
 constexpr double kBuiltinSurfaceSizeMm = 3.0;     // resolution of the built-in lung's reference surface
-constexpr double kCrackExtension = 0.003;         // [m] the FEM cut reaches this far above the surface line
 
 // ---------------------------------------------------------------------------------------------------
 // Gmsh model construction (lengths in the model's own unit: mm for the built-in lung, the STL's unit)
@@ -284,7 +283,7 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
   // its nodes.
   const std::optional<CrackEmbedding> crack =
-      cut ? std::optional(embed_cut_in_body(body, *cut, to_m, kCrackExtension)) : std::nullopt;
+      cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
   TetMesh mesh;
   try {
     mesh = mesh_volume(size / to_m, to_m, [&] {
@@ -310,6 +309,30 @@ SurfacePoint snap(const Case& c, const TriangleSurface& s, const Eigen::Vector3d
                                 "(within {:.1f} mm)",
                                 what, p.distance * 1e3, tolerance * 1e3));
   return p;
+}
+
+/// The incision must end inside the tissue: below every point of its top line, the body must be thicker than the
+/// depth along the cut direction (a cut through the whole body would split it in two, which neither model treats).
+void check_cut_depth(const Case& c, const TriangleSurface& surface, const RuledSurface& cut) {
+  constexpr int kSamplesPerSegment = 4;
+  constexpr double kInset = 1e-4;  // [m] start the ray just inside the surface
+  double thinnest = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d where = cut.top().front();
+  for (int j = 0; j < cut.num_panels(); ++j)
+    for (int k = 0; k <= kSamplesPerSegment; ++k) {
+      const Eigen::Vector3d p =
+          cut.top()[j] + (static_cast<double>(k) / kSamplesPerSegment) * (cut.top()[j + 1] - cut.top()[j]);
+      const double thickness = kInset + surface.ray_hit(p + kInset * cut.direction(), cut.direction());
+      if (thickness < thinnest) {
+        thinnest = thickness;
+        where = p;
+      }
+    }
+  if (cut.depth() >= thinnest)
+    throw CaseError(c.source_file, "/cut/depth",
+                    fmt::format("an incision {:.1f} mm deep leaves the body: below ({:.1f}, {:.1f}, {:.1f}) mm the "
+                                "tissue is only {:.1f} mm thick along the cut direction; expected a depth below that",
+                                cut.depth() * 1e3, where.x() * 1e3, where.y() * 1e3, where.z() * 1e3, thinnest * 1e3));
 }
 
 }  // namespace
@@ -353,15 +376,18 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
       top.push_back(snap(c, g.surface, c.cut->polyline[i], kSnapTolerance,
                          "/cut/polyline/" + std::to_string(i), "the cut point")
                         .point);
-    const SurfacePoint first = g.surface.closest_point(top.front());
-    if (first.normal.dot(c.cut->direction) > 0.0)
-      throw CaseError(c.source_file, "/cut/direction",
-                      "points out of the body at the first cut point; expected a direction into the tissue");
+    for (std::size_t i = 0; i < top.size(); ++i)
+      if (g.surface.closest_point(top[i]).normal.dot(c.cut->direction) > 0.0)
+        throw CaseError(c.source_file, "/cut/direction",
+                        fmt::format("points out of the body at cut point {} (/cut/polyline/{}); expected a direction "
+                                    "into the tissue at every point of the incision",
+                                    i, i));
     try {
       g.cut.emplace(top, c.cut->direction, c.cut->depth);
     } catch (const std::invalid_argument& e) {
-      throw CaseError(c.source_file, "/cut", std::string("expected a valid incision: ") + e.what());
+      throw CaseError(c.source_file, "/cut/polyline", std::string("expected a simple incision: ") + e.what());
     }
+    check_cut_depth(c, g.surface, *g.cut);
   }
   g.sample_points = choose_samples(g.surface, c.samples, g.load_centre, g.load_normal);
 
@@ -369,7 +395,7 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
     g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
-    if (g.cut) tag_crack_faces(*g.cut, kCrackExtension, &g.fem_mesh);
+    if (g.cut) tag_crack_faces(*g.cut, &g.fem_mesh);
   }
   if (options.build_node_cloud) {
     g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);

@@ -4,11 +4,13 @@
 
 #include <chrono>
 #include <fstream>
+#include <optional>
 #include <iostream>
 
 #include "core/output_directory.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/vtu_writer.hpp"
+#include "meshless/cut_quadrature.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
@@ -22,13 +24,54 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 
 Eigen::MatrixXd vector_field(const core::PointMatrix& m) { return Eigen::MatrixXd(m); }
 
+/// Both lips of the model's cut inside the body as triangles, each vertex with the displacement of its own lip, so
+/// the cut shows open when warped by the displacement (ParaView: Warp By Vector).
+void write_lips_vtu(const std::string& path, const meshless::EfgModel& model) {
+  const core::RuledSurface& cut = *model.problem().cut;
+  const core::TetMesh& mesh = model.problem().mesh;
+  std::vector<Eigen::Vector3d> vertices;
+  std::vector<int> lip_of_vertex;
+  std::vector<std::vector<Eigen::Vector3d>> polygons;
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    meshless::TetVertices tet;
+    for (int k = 0; k < 4; ++k) tet[k] = mesh.vertices.row(mesh.tets(t, k)).transpose();
+    meshless::panels_crossing_tet(cut, tet, &polygons);
+    for (const auto& polygon : polygons)
+      for (int side : {1, -1})
+        for (std::size_t v = 1; v + 1 < polygon.size(); ++v)
+          for (const Eigen::Vector3d& x : {polygon[0], polygon[v], polygon[v + 1]}) {
+            vertices.push_back(x);
+            lip_of_vertex.push_back(side);
+          }
+  }
+  const Eigen::Index n = static_cast<Eigen::Index>(vertices.size());
+  core::PointMatrix points(n, 3);
+  core::TriMatrix triangles(n / 3, 3);
+  Eigen::MatrixXd displacement(n, 3), lip(n / 3, 1);
+  for (Eigen::Index v = 0; v < n; ++v) {
+    points.row(v) = vertices[v].transpose();
+    displacement.row(v) = model.displacement_at(vertices[v], lip_of_vertex[v]).transpose();
+    if (v % 3 == 0) {
+      triangles.row(v / 3) << static_cast<int>(v), static_cast<int>(v + 1), static_cast<int>(v + 2);
+      lip(v / 3, 0) = lip_of_vertex[v];
+    }
+  }
+  write_triangle_vtu(path, points, triangles, {{"displacement", displacement}}, {{"lip", lip}});
+}
+
 }  // namespace
 
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
                            const std::function<void(const std::string&)>& on_step,
-                           const meshless::EfgOptions& options) {
+                           const meshless::EfgOptions& options, bool progressive_cut) {
   const auto t_start = std::chrono::steady_clock::now();
-  meshless::EfgModel model(meshless::problem_from_case(c, g), options);
+  meshless::EfgProblem problem = meshless::problem_from_case(c, g);
+  // A progressive incision starts with its first increment and advances at the start of the next steps.
+  const int increments = progressive_cut && problem.cut ? c.cut->steps : 1;
+  const std::optional<core::RuledSurface> full_cut = problem.cut;
+  auto cut_after = [&](int k) { return full_cut->truncated(full_cut->trace_length() * k / increments); };
+  if (increments > 1) problem.cut = cut_after(1);
+  meshless::EfgModel model(std::move(problem), options);
   model.setup_system();
   const meshless::EfgStatistics& st = model.statistics();
   if (on_step)
@@ -38,15 +81,34 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                         st.matrix_nonzeros, st.linear_solver));
   ModelResult r;
   r.model = "meshless";
+  nlohmann::json cut_updates = nlohmann::json::array();
   const int n_steps = static_cast<int>(model.problem().step_times.size());
   const int every = std::max(1, c.output.every);
   for (int step = 1; step <= n_steps; ++step) {
     const auto t0 = std::chrono::steady_clock::now();
+    if (step > 1 && step <= increments) {
+      const meshless::CutUpdate u = model.advance_cut(cut_after(step));  // paper §4: a local update
+      cut_updates.push_back({{"step", step},
+                             {"cut_length_mm", model.problem().cut->trace_length() * 1e3},
+                             {"volume_points_recomputed", u.volume_points_recomputed},
+                             {"volume_points", u.volume_points},
+                             {"boundary_points_recomputed", u.boundary_points_recomputed},
+                             {"boundary_points", u.boundary_points},
+                             {"modified_nodes", u.modified_nodes},
+                             {"shape_function_seconds", u.shape_function_seconds},
+                             {"seconds", u.seconds}});
+      if (on_step)
+        on_step(fmt::format("cut advanced to {:.1f} of {:.1f} mm: shape functions of {} of {} volume points "
+                            "recomputed in {:.2f} s",
+                            model.problem().cut->trace_length() * 1e3, full_cut->trace_length() * 1e3,
+                            u.volume_points_recomputed, u.volume_points, u.seconds));
+    }
     const meshless::StepRecord rec = model.solve_step(step);
     if (!vtu_prefix.empty() && c.output.vtu && (step % every == 0 || step == n_steps)) {
       // output_results: interpolated displacement u(X_i) = sum_j phi_j(X_i) U_j on the meshless cells (eq. 7)
       write_tet_vtu(fmt::format("{}_{:03d}.vtu", vtu_prefix, step), model.nodes(), g.meshless_mesh.tets,
                     {{"displacement", vector_field(model.nodal_displacements())}}, {});
+      if (model.problem().cut) write_lips_vtu(fmt::format("{}_lips_{:03d}.vtu", vtu_prefix, step), model);
     }
     r.steps.push_back({rec.step, rec.time, seconds_since(t0), rec.assembly_seconds, rec.solve_seconds,
                        rec.newton_iterations, rec.residuals, rec.linear_iterations});
@@ -79,6 +141,15 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["umfpack_flops_estimate"] = st.direct_flops_estimate;
   r.details["nonlinear_solver"] =
       "Newton on the consistent tangent (core::KelvinLaw), reusing the factorised tangent while it contracts the residual";
+  if (model.problem().cut) {
+    r.details["cut"] = {{"treatment", meshless::to_string(model.problem().cut_treatment)},
+                        {"front_transition_mm", model.problem().front_transition * 1e3},
+                        {"length_mm", model.problem().cut->trace_length() * 1e3},
+                        {"lip_points", st.num_lip_points},
+                        {"modified_nodes", st.num_cut_modified_nodes},
+                        {"increments", increments},
+                        {"updates", cut_updates}};
+  }
   r.details["setup_seconds"] = t.setup_seconds;
   r.details["shape_function_seconds"] = t.shape_function_seconds;
   r.details["assembly_seconds"] = t.assembly_seconds;

@@ -7,17 +7,31 @@
 
 namespace experiments {
 
+void describe_samples_near_cut(const core::Geometry& g, ModelResult* r) {
+  r->sample_cut_distance.clear();
+  r->sample_lip.clear();
+  if (!g.cut) return;
+  for (Eigen::Index i = 0; i < g.sample_points.rows(); ++i) {
+    const Eigen::Vector3d x = g.sample_points.row(i).transpose();
+    r->sample_cut_distance.push_back(g.cut->distance(x));
+    r->sample_lip.push_back(g.cut->frame(x).behind_front ? g.cut->side(x) : 0);
+  }
+}
+
 void write_samples_csv(const std::string& path, const ModelResult& r) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << "sample,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm\n";
+  out << "sample,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm,cut_distance_mm,lip\n";
+  const bool cut = !r.sample_cut_distance.empty();
   for (Eigen::Index i = 0; i < r.sample_points.rows(); ++i) {
     const Eigen::Vector3d x = r.sample_points.row(i).transpose() * 1e3;
     const Eigen::Vector3d u = r.sample_displacements.row(i).transpose() * 1e3;
     // eq. 33: the displacement of a sample is the distance between its deformed and original positions.
-    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", i, x(0), x(1), x(2), u(0), u(1), u(2),
-                       u.norm());
+    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g},{},{}\n", i, x(0), x(1), x(2), u(0), u(1),
+                       u(2), u.norm(), cut ? fmt::format("{:.6f}", r.sample_cut_distance[i] * 1e3) : std::string(),
+                       cut ? r.sample_lip[i] : 0);
   }
+  if (!out) throw std::runtime_error("could not finish writing " + path);
 }
 
 nlohmann::json timings_json(const ModelResult& r) {

@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry.hpp"
+
 namespace experiments {
 
 struct StepTiming {
@@ -27,10 +29,18 @@ struct ModelResult {
   double setup_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<StepTiming> steps;
+  /// Per sample when the case has a cut (empty otherwise): its distance to the cut [m], and the lip the shared rule
+  /// (core::RuledSurface::side) puts it on, +1 or -1 behind the crack front, 0 past it.
+  std::vector<double> sample_cut_distance;
+  std::vector<int> sample_lip;
   nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
 };
 
-/// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|).
+/// Fill sample_cut_distance and sample_lip from the geometry's cut (nothing without one).
+void describe_samples_near_cut(const core::Geometry& geometry, ModelResult* result);
+
+/// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|), cut_distance_mm
+/// (empty without a cut), lip (+1 / -1 behind the cut's front, 0 elsewhere).
 void write_samples_csv(const std::string& path, const ModelResult& result);
 /// timings.json: setup, totals and per-step timings with Newton iterations and residuals.
 nlohmann::json timings_json(const ModelResult& result);

@@ -3,18 +3,23 @@
 // (problem_from_case) or a verification problem built in code (patch test, cantilever, creep bar).
 #include <Eigen/Core>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/kelvin_law.hpp"
+#include "core/ruled_surface.hpp"
 #include "core/tet_mesh.hpp"
+#include "meshless/cut_weights.hpp"
 #include "meshless/support_radii.hpp"
 
 namespace meshless {
 
 using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
+/// A traction on a cut's lips [Pa] from the point [m] and the lip's outward unit normal.
+using LipTraction = std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& outward_normal)>;
 
 enum class LinearSolverKind {
   automatic,  ///< direct when the estimated peak memory of the LU fits EfgOptions::direct_solver_memory_fraction
@@ -68,11 +73,23 @@ struct EfgProblem {
   /// Steps at which output_results() writes (the last step is always written). Empty -> every step.
   int output_every = 1;
 
+  /// The incision (paper §4) when the body is cut: the shape functions are made discontinuous across it by
+  /// `cut_treatment` (meshless/cut_weights.hpp), the background cells and boundary faces it crosses are split, and
+  /// its two lips become boundary (traction-free unless lip_traction is set).
+  std::optional<core::RuledSurface> cut;
+  CutTreatment cut_treatment = CutTreatment::enrichment;
+  /// l of the enrichment's front transition [m] (meshless/cut_weights.hpp); 0 = the paper's phi as it stands.
+  double front_transition = 0.0;
+  /// Traction on the lips at full load (scaled by load_scale(t)); empty = traction-free, as an incision is.
+  /// Verification problems load them with sigma n.
+  LipTraction lip_traction;
+
   double alpha() const { return penalty_factor * material.K1 / node_spacing; }
 };
 
 /// The load case of a config: meshless_mesh of the geometry, zero u-bar on the fixed faces, uniform traction
-/// force(t) / A_patch on the load faces (A_patch = area of the load-tagged faces of the meshless mesh).
+/// force(t) / A_patch on the load faces (core::load_program), and the geometry's cut (if any) with the case's
+/// treatment (/meshless/enrichment) and front transition (/meshless/front_transition).
 EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g);
 
 }  // namespace meshless

@@ -137,12 +137,12 @@ TEST(BuiltinLung, CutIsSnappedToTheSurfaceAsARuledSurface) {
   EXPECT_NEAR(g.cut->area(), expected, 1e-12);
   // Points on either side of a panel have opposite signs of s; the mid-panel point has s = 0.
   const Eigen::Vector3d mid = 0.5 * (g.cut->top()[0] + g.cut->top()[1]) + 0.5 * c.cut->depth * c.cut->direction;
-  const core::CutCoordinates on = g.cut->coordinates(mid, 0);
+  const core::CutFrame on = g.cut->frame(mid);
   EXPECT_NEAR(on.s, 0.0, 1e-12);
   EXPECT_NEAR(on.depth, 0.5 * c.cut->depth, 1e-12);
   const Eigen::Vector3d n = g.cut->panel_normal(0);
-  EXPECT_GT(g.cut->coordinates(mid + 1e-3 * n, 0).s, 0.0);
-  EXPECT_LT(g.cut->coordinates(mid - 1e-3 * n, 0).s, 0.0);
+  EXPECT_GT(g.cut->frame(mid + 1e-3 * n).s, 0.0);
+  EXPECT_LT(g.cut->frame(mid - 1e-3 * n).s, 0.0);
   EXPECT_NEAR(g.cut->distance(mid + 2e-3 * n), 2e-3, 1e-12);
 }
 
