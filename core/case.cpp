@@ -109,7 +109,7 @@ CutSpec read_cut(const JsonReader& r) {
 MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_size) {
   MeshlessSpec m;
   m.node_spacing = fem_mesh_size;
-  m.front_transition = fem_mesh_size;
+  m.front_transition = fem_mesh_size * MeshlessSpec::kFrontTransitionPerSpacing;
   if (!r) return m;
   m.node_spacing = r->in_range("node_spacing", 0.5, 200.0, true, true, fem_mesh_size / kMm) * kMm;
   m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, 2.0);
@@ -117,7 +117,9 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
   m.quadrature_order = r->integer("quadrature_order", 1, 8, 2);
   m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, 1e3);
   m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, std::string("enrichment"));
-  m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true, m.node_spacing / kMm) * kMm;
+  m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true,
+                                   m.node_spacing * MeshlessSpec::kFrontTransitionPerSpacing / kMm) *
+                       kMm;
   r->finish();
   return m;
 }

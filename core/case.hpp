@@ -70,8 +70,11 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
-  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp); default: node_spacing
-  double front_transition = 0.012;
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default,
+  /// node_spacing / 50, keeps the shape functions continuous at the front and costs no accuracy against the FEM crack
+  /// (docs/MESHLESS.md §5: at l comparable to the Gauss-point spacing it stiffens the crack).
+  double front_transition = 0.012 * kFrontTransitionPerSpacing;
+  static constexpr double kFrontTransitionPerSpacing = 0.02;
 };
 
 struct FemSpec {
