@@ -23,6 +23,7 @@ class SupportRadii;
 class MlsShapeFunctions;
 class CutWeights;
 struct NodeHit;
+class EfgLinearSolver;
 
 /// What happened in one time step.
 struct StepRecord {
@@ -147,9 +148,6 @@ class EfgModel {
   /// True when a node covering x has a different weight (or gradient) under `before` than under the current cut.
   bool weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
                        std::vector<NodeHit>* hits) const;
-  bool use_direct_solver() const { return use_direct_; }
-  /// Decide direct or iterative for the assembled pattern (setup_system); fills the estimates in stats_.
-  bool choose_direct_solver();
 
   EfgProblem problem_;
   EfgOptions options_;
@@ -173,11 +171,9 @@ class EfgModel {
 
   Eigen::VectorXd u_, residual_, external_;
   SparseMatrix matrix_;
-  struct Factorisation;
-  std::unique_ptr<Factorisation> factorisation_;
+  std::unique_ptr<EfgLinearSolver> linear_solver_;  // created by setup_system for the sparsity pattern
   double current_dt_ = 0.0;
   double factorised_dt_ = -1.0;
-  bool use_direct_ = true;
   int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
