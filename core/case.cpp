@@ -32,6 +32,12 @@ GeometrySpec read_geometry(const JsonReader& r) {
     g.stl_unit_to_m = unit_to_metres(r, "length_unit");
   }
   g.mesh_size = r.in_range("mesh_size", 0.5, 200.0, true, true) * kMm;
+  if (auto refinement = r.optional_object("refinement")) {
+    g.load_patch_refinement = refinement->in_range("load_patch", 0.05, 1.0, true, true, g.load_patch_refinement);
+    g.fixed_region_refinement =
+        refinement->in_range("fixed_region", 0.05, 1.0, true, true, g.fixed_region_refinement);
+    refinement->finish();
+  }
   r.finish();
   return g;
 }

@@ -21,6 +21,11 @@ struct GeometrySpec {
   std::string stl_file;           ///< absolute path, resolved against the config's folder
   double stl_unit_to_m = 1e-3;    ///< metres per STL length unit
   double mesh_size = 0.012;       ///< FEM tetrahedron size [m]
+  /// Local element sizes as fractions of the mesh size (FEM) and of the node spacing (node cloud), so that a mesh
+  /// study refines where the compared quantities live: under the probe (the samples, the traction's edge) and
+  /// around a near_point fixed region (the clamp's edge, where most of the lung's error lives).
+  double load_patch_refinement = 0.5;
+  double fixed_region_refinement = 0.35;
 };
 
 /// Which nodes are held fixed (essential boundary, eq. 19/23).

@@ -253,16 +253,18 @@ int add_ball_field(const Eigen::Vector3d& centre, double radius, double thicknes
   return ball;
 }
 
-/// Refine where the solution is sensitive to the region boundaries: elements of at most r/2 within 1.5 r of
-/// the load centre (so the imprinted patch circle is resolved even on coarse meshes), and of at most d/4
-/// around a near_point fixed region (the body hangs from it). Model units (mm).
+/// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
+/// of a mesh study refines there too: elements of load_patch_refinement * size within 1.5 r of the load centre (the
+/// patch, its edge and the samples around it) and of fixed_region_refinement * size within 1.2 d of a near_point
+/// fixed region (the body hangs from it; the clamp's edge is where the lung's error lives). Model units (mm).
 void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size) {
   const double r = c.load.radius / 1e-3;
   std::vector<double> fields{static_cast<double>(
-      add_ball_field(load_centre / 1e-3, 1.5 * r, r, std::min(size, 0.5 * r), size))};
+      add_ball_field(load_centre / 1e-3, 1.5 * r, r, c.geometry.load_patch_refinement * size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const double d = c.fixed_region.distance / 1e-3;
-    fields.push_back(add_ball_field(c.fixed_region.point / 1e-3, 1.2 * d, 0.5 * d, std::min(size, 0.25 * d), size));
+    fields.push_back(add_ball_field(c.fixed_region.point / 1e-3, 1.2 * d, 0.5 * d,
+                                    c.geometry.fixed_region_refinement * size, size));
   }
   const int min_field = gmsh::model::mesh::field::add("Min");
   gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
