@@ -23,9 +23,9 @@ struct GeometrySpec {
   double mesh_size = 0.012;       ///< FEM tetrahedron size [m]
   /// Local element sizes as fractions of the mesh size (FEM) and of the node spacing (node cloud), so that a mesh
   /// study refines where the compared quantities live: under the probe (the samples, the traction's edge) and
-  /// around a near_point fixed region (the clamp's edge, where most of the lung's error lives).
+  /// along the edge of a near_point fixed region (the clamp's edge, where most of the lung's error lives).
   double load_patch_refinement = 0.5;
-  double fixed_region_refinement = 0.35;
+  double fixed_region_refinement = 0.45;
 };
 
 /// Which nodes are held fixed (essential boundary, eq. 19/23).

@@ -253,18 +253,69 @@ int add_ball_field(const Eigen::Vector3d& centre, double radius, double thicknes
   return ball;
 }
 
+/// True when every boundary curve of model face `face` lies within `radius` of `centre` (model units): the face is a
+/// piece of the surface inside the ball. (A face's centre of mass would not do: a large face with the imprinted patch
+/// as a hole has its centre inside the ball too.)
+bool face_inside_ball(int face, const Eigen::Vector3d& centre, double radius) {
+  constexpr int kSamplesPerCurve = 8;
+  gmsh::vectorpair curves;
+  gmsh::model::getBoundary({{2, face}}, curves, /*combined=*/false, /*oriented=*/false);
+  for (const auto& curve : curves) {
+    std::vector<double> lo, hi, xyz;
+    gmsh::model::getParametrizationBounds(1, std::abs(curve.second), lo, hi);
+    std::vector<double> params;
+    for (int k = 0; k <= kSamplesPerCurve; ++k) params.push_back(lo[0] + (hi[0] - lo[0]) * k / kSamplesPerCurve);
+    gmsh::model::getValue(1, std::abs(curve.second), params, xyz);
+    for (std::size_t k = 0; k + 2 < xyz.size(); k += 3)
+      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + 1e-6)) return false;
+  }
+  return true;
+}
+
+/// The curves where the imprinted fixed region (near_point) meets the rest of the body's surface: the clamp's edge,
+/// from the current model (after every fragment: the region imprint and a crack). The fixed patch is the part of the
+/// body's outer surface inside the fixed ball; its combined boundary is the edge.
+std::vector<double> clamp_edge_curves(const Case& c) {
+  gmsh::vectorpair volumes, outer, fixed, edge;
+  gmsh::model::getEntities(volumes, 3);
+  gmsh::model::getBoundary(volumes, outer, /*combined=*/true, /*oriented=*/false);
+  const Eigen::Vector3d centre = c.fixed_region.point / 1e-3;
+  for (const auto& face : outer)
+    if (face_inside_ball(std::abs(face.second), centre, c.fixed_region.distance / 1e-3))
+      fixed.emplace_back(2, std::abs(face.second));
+  std::vector<double> curves;
+  if (fixed.empty()) return curves;
+  gmsh::model::getBoundary(fixed, edge, /*combined=*/true, /*oriented=*/false);
+  for (const auto& curve : edge) curves.push_back(std::abs(curve.second));
+  return curves;
+}
+
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
-/// of a mesh study refines there too: elements of load_patch_refinement * size within 1.5 r of the load centre (the
-/// patch, its edge and the samples around it) and of fixed_region_refinement * size within 1.2 d of a near_point
-/// fixed region (the body hangs from it; the clamp's edge is where the lung's error lives). Model units (mm).
+/// of a mesh study refines there too (model units, mm):
+///  * elements of load_patch_refinement * size within 1.5 r of the load centre: the patch, its edge (where the
+///    traction jumps) and the samples around it;
+///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
+///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
+///    counts this costs).
 void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size) {
   const double r = c.load.radius / 1e-3;
   std::vector<double> fields{static_cast<double>(
       add_ball_field(load_centre / 1e-3, 1.5 * r, r, c.geometry.load_patch_refinement * size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
-    const double d = c.fixed_region.distance / 1e-3;
-    fields.push_back(add_ball_field(c.fixed_region.point / 1e-3, 1.2 * d, 0.5 * d,
-                                    c.geometry.fixed_region_refinement * size, size));
+    const std::vector<double> edge = clamp_edge_curves(c);
+    if (!edge.empty()) {
+      const double fine = c.geometry.fixed_region_refinement * size;
+      const int distance = gmsh::model::mesh::field::add("Distance");
+      gmsh::model::mesh::field::setNumbers(distance, "CurvesList", edge);
+      gmsh::model::mesh::field::setNumber(distance, "NumPointsPerCurve", 200);
+      const int threshold = gmsh::model::mesh::field::add("Threshold");
+      gmsh::model::mesh::field::setNumber(threshold, "InField", distance);
+      gmsh::model::mesh::field::setNumber(threshold, "SizeMin", fine);
+      gmsh::model::mesh::field::setNumber(threshold, "SizeMax", size);
+      gmsh::model::mesh::field::setNumber(threshold, "DistMin", fine);
+      gmsh::model::mesh::field::setNumber(threshold, "DistMax", fine + size);
+      fields.push_back(threshold);
+    }
   }
   const int min_field = gmsh::model::mesh::field::add("Min");
   gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
@@ -281,11 +332,12 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const int solid = c.geometry.source == GeometrySpec::Source::builtin_lung ? add_builtin_lung()
                                                                              : add_stl_solid(surface, to_m);
   const std::vector<int> body = imprint_regions(c, solid, load_centre);
-  refine_regions(c, load_centre, size / to_m);
   // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
   // its nodes.
   const std::optional<CrackEmbedding> crack =
       cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
+  // After the last fragment, so that the clamp's edge curves are the ones that get meshed.
+  refine_regions(c, load_centre, size / to_m);
   TetMesh mesh;
   try {
     mesh = mesh_volume(size / to_m, to_m, [&] {
