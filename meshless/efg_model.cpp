@@ -3,16 +3,14 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include <Eigen/IterativeLinearSolvers>
 #include <limits>
-#include <Eigen/UmfPackSupport>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
 #include <stdexcept>
 
-#include "meshless/direct_solver_estimate.hpp"
+#include "meshless/efg_linear_solver.hpp"
 #include "meshless/mls_shape_functions.hpp"
 #include "meshless/node_search.hpp"
 #include "meshless/support_radii.hpp"
@@ -57,35 +55,10 @@ void parallel_for(int n, int chunk, const Body& body) {
 
 }  // namespace
 
-struct EfgModel::Factorisation {
-  // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
-  // row), where Eigen's SparseLU is an order of magnitude slower.
-  Eigen::UmfPackLU<UmfpackMatrix> lu;
-  /// umfpack_numeric's status. Eigen::UmfPackLU reports every non-zero status as NumericalIssue, but the
-  /// determinant under/overflow warnings come with a valid factorisation (UMFPACK user guide), so only the
-  /// singular-matrix warning and the errors are failures; the message names which one it was.
-  static bool factorised(long status) {
-    return status == UMFPACK_OK || status == UMFPACK_WARNING_determinant_underflow ||
-           status == UMFPACK_WARNING_determinant_overflow;
-  }
-  static std::string describe(long status) {
-    switch (status) {
-      case UMFPACK_WARNING_singular_matrix: return "numerically singular matrix";
-      case UMFPACK_ERROR_out_of_memory: return "UMFPACK ran out of memory";
-      default: return fmt::format("UMFPACK status {}", status);
-    }
-  }
-  bool analysed = false;
-  UmfpackMatrix colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
-  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
-  bool valid = false;  // holds a factorisation (or preconditioner) of the current matrix_
-};
-
 EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
     : problem_(std::move(problem)),
       options_(options),
-      law_(problem_.material),
-      factorisation_(std::make_unique<Factorisation>()) {
+      law_(problem_.material) {
   if (!(problem_.node_spacing > 0.0))
     throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
   if (!(problem_.penalty_factor > 0.0))
@@ -103,18 +76,6 @@ EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
 }
 
 EfgModel::~EfgModel() = default;
-
-bool EfgModel::choose_direct_solver() {
-  switch (options_.linear_solver) {
-    case LinearSolverKind::direct: return true;
-    case LinearSolverKind::iterative: return false;
-    case LinearSolverKind::automatic: break;
-  }
-  const DirectSolverEstimate e = estimate_direct_solver_blocked(sparsity_->node_pattern(), 3);
-  stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
-  stats_.direct_flops_estimate = e.factorisation_flops;
-  return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();
-}
 
 void EfgModel::setup_system() {
   auto t0 = std::chrono::steady_clock::now();
@@ -192,9 +153,12 @@ void EfgModel::setup_system() {
   stats_.penalised_area = boundary_.penalised_area;
   stats_.loaded_area = boundary_.loaded_area;
   const auto t_choice = std::chrono::steady_clock::now();
-  use_direct_ = choose_direct_solver();  // an AMD ordering of the node pairs: part of the set-up cost
+  // The automatic choice runs an AMD ordering of the node pairs: part of the set-up cost.
+  linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, problem_.name);
   timings_.setup_seconds += seconds_since(t_choice);
-  stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (Jacobi preconditioner)";
+  stats_.linear_solver = linear_solver_->description();
+  stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
+  stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
   set_up_ = true;
 }
 
@@ -290,52 +254,16 @@ void EfgModel::assemble_system(bool with_matrix) {
     throw std::runtime_error(fmt::format("EfgModel '{}': the residual is not finite", problem_.name));
   if (with_matrix) {
     matrix_current_ = true;
-    factorisation_->valid = false;
+    linear_solver_->invalidate();
   }
 }
 
 void EfgModel::solve() {
-  if (!matrix_current_ && !factorisation_->valid)
+  if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
     throw std::logic_error("EfgModel::solve without an assembled matrix");
-  Eigen::VectorXd du;
-  Factorisation& f = *factorisation_;
-  if (use_direct_solver()) {
-    if (!f.valid) {
-      f.colmajor = matrix_;
-      const UmfpackMatrix& a = f.colmajor;
-      if (!f.analysed) {
-        f.lu.analyzePattern(a);  // the pattern never changes: order the columns once
-        if (f.lu.info() != Eigen::Success)
-          throw std::runtime_error(fmt::format("EfgModel '{}': UMFPACK symbolic analysis failed: {}", problem_.name,
-                                               Factorisation::describe(f.lu.umfpackFactorizeReturncode())));
-        f.analysed = true;
-      }
-      f.lu.factorize(a);
-      const long status = f.lu.umfpackFactorizeReturncode();
-      if (!Factorisation::factorised(status))
-        throw std::runtime_error(fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", problem_.name,
-                                             Factorisation::describe(status)));
-      f.valid = true;
-    }
-    const Eigen::VectorXd rhs = -residual_;
-    du = f.lu.solve(rhs);
-  } else {
-    if (!f.valid) {
-      f.bicgstab.setTolerance(options_.iterative_tolerance);
-      f.bicgstab.setMaxIterations(options_.iterative_max_iterations);
-      f.bicgstab.compute(matrix_);
-      f.valid = true;
-    }
-    du = f.bicgstab.solve(-residual_);
-    last_linear_iterations_ = static_cast<int>(f.bicgstab.iterations());
-    if (f.bicgstab.info() != Eigen::Success)
-      throw std::runtime_error(fmt::format("EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g})",
-                                           problem_.name, f.bicgstab.iterations(), f.bicgstab.error()));
-  }
-  if (!du.allFinite())
-    throw std::runtime_error(fmt::format("EfgModel '{}': the linear solve produced a non-finite update",
-                                         problem_.name));
-  u_ += du;  // eq. 14
+  if (!linear_solver_->prepared()) linear_solver_->prepare(matrix_);
+  u_ += linear_solver_->solve(-residual_);  // eq. 14; solve() checks the update is finite
+  last_linear_iterations_ = linear_solver_->last_iterations();
   factorised_dt_ = current_dt_;
 }
 
@@ -357,10 +285,10 @@ StepRecord EfgModel::solve_step(int step) {
   // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
   // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
   const bool constant_tangent = problem_.material.k == 0.0;
-  bool refresh = !factorisation_->valid || factorised_dt_ != current_dt_;
+  bool refresh = !linear_solver_->prepared() || factorised_dt_ != current_dt_;
   double previous = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
-    const bool reuse = !refresh && factorisation_->valid && factorised_dt_ == current_dt_;
+    const bool reuse = !refresh && linear_solver_->prepared() && factorised_dt_ == current_dt_;
     auto t0 = std::chrono::steady_clock::now();
     assemble_system(!reuse);
     if (reuse) rec.reused_factorisation = true;

@@ -21,6 +21,7 @@ namespace meshless {
 class NodeSearch;
 class SupportRadii;
 class MlsShapeFunctions;
+class EfgLinearSolver;
 
 /// What happened in one time step.
 struct StepRecord {
@@ -112,9 +113,6 @@ class EfgModel {
 
  private:
   void update_material(double dt);
-  bool use_direct_solver() const { return use_direct_; }
-  /// Decide direct or iterative for the assembled pattern (setup_system); fills the estimates in stats_.
-  bool choose_direct_solver();
 
   EfgProblem problem_;
   EfgOptions options_;
@@ -137,11 +135,9 @@ class EfgModel {
 
   Eigen::VectorXd u_, residual_, external_;
   SparseMatrix matrix_;
-  struct Factorisation;
-  std::unique_ptr<Factorisation> factorisation_;
+  std::unique_ptr<EfgLinearSolver> linear_solver_;  // created by setup_system for the sparsity pattern
   double current_dt_ = 0.0;
   double factorised_dt_ = -1.0;
-  bool use_direct_ = true;
   int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
