@@ -45,12 +45,19 @@ struct Variant {
   }
 };
 
+/// The model shared by the benchmarks. main() destroys it before MPI and PETSc are finalised: its solver holds
+/// PETSc objects.
+std::unique_ptr<meshless::EfgModel>& cached_model() {
+  static std::unique_ptr<meshless::EfgModel> model;
+  return model;
+}
+
 /// One set-up model per size and variant, shared by the benchmarks (set-up of the 32k cloud takes tens of
 /// seconds). Only one is kept alive at a time: the 32k model alone holds several GB.
 meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
   static int key_side = 0;
   static Variant key;
-  static std::unique_ptr<meshless::EfgModel> model;
+  std::unique_ptr<meshless::EfgModel>& model = cached_model();
   if (!model || key_side != side || key != variant) {
     model.reset();
     meshless::EfgOptions options;
@@ -162,5 +169,6 @@ int main(int argc, char** argv) {
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
+  cached_model().reset();
   return 0;
 }

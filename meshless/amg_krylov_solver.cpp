@@ -36,7 +36,9 @@ struct AmgKrylovSolver::Petsc {
   PetscInt n = 0;
 
   ~Petsc() {
-    // Destruction must not throw; PETSc reports its own errors here.
+    // Destruction must not throw; PETSc reports its own errors here. After PetscFinalize (an object that
+    // outlived MPI_InitFinalize) PETSc and MPI may not be called: leak rather than abort the program.
+    if (!petsc_initialised()) return;
     if (ksp) KSPDestroy(&ksp);
     if (rigid_body_modes) MatNullSpaceDestroy(&rigid_body_modes);
     if (a) MatDestroy(&a);

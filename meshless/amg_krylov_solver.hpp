@@ -6,7 +6,8 @@
 //
 // PETSc (and MPI) must be initialised before the first solver is constructed and finalised after the last
 // one is destroyed: dealii::Utilities::MPI::MPI_InitFinalize in main does both. Serial only
-// (PETSC_COMM_SELF). Not thread-safe; the PETSc calls themselves run on one thread.
+// (PETSC_COMM_SELF). Not thread-safe; the PETSc calls themselves run on one thread. A solver destroyed after
+// PETSc was finalised releases nothing (its PETSc objects leak) rather than call PETSc and abort.
 #include <Eigen/Core>
 #include <memory>
 #include <string>
