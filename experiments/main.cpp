@@ -1,5 +1,6 @@
 // tissue: the command-line front end of the harness (see README.md and docs/ARCHITECTURE.md).
 #include <CLI/CLI.hpp>
+#include <deal.II/base/mpi.h>
 #include <fmt/format.h>
 
 #include <iostream>
@@ -11,6 +12,8 @@
 #include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
+  // MPI and PETSc (the EFG model's AMG-Krylov solve, docs/MESHLESS.md §2), finalised when main returns.
+  dealii::Utilities::MPI::MPI_InitFinalize mpi_initialization(argc, argv);
   CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "tissue 0.1.0");

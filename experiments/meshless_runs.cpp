@@ -141,6 +141,7 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["linear_solver"] = st.linear_solver;
   r.details["umfpack_peak_memory_estimate_bytes"] = st.direct_peak_memory_estimate;
   r.details["umfpack_flops_estimate"] = st.direct_flops_estimate;
+  r.details["available_memory_bytes"] = st.available_memory;
   r.details["nonlinear_solver"] =
       "Newton on the consistent tangent (core::KelvinLaw), reusing the factorised tangent while it contracts the residual";
   if (model.problem().cut) {

@@ -32,7 +32,7 @@ struct StepRecord {
   double dt = 0.0;          ///< [s]
   double load_scale = 0.0;  ///< load_scale(time)
   int newton_iterations = 0;               ///< linear solves
-  int linear_iterations = 0;               ///< BiCGSTAB iterations over the step (0 with the direct solver)
+  int linear_iterations = 0;               ///< Krylov iterations over the step (0 with the direct solver)
   std::vector<double> residuals;           ///< ||R|| / ||F_ext|| before each solve and after the last
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
@@ -73,6 +73,7 @@ struct EfgStatistics {
   /// only, 0 when not estimated).
   double direct_peak_memory_estimate = 0.0;  ///< [bytes]
   double direct_flops_estimate = 0.0;
+  double available_memory = 0.0;  ///< [bytes] the budget the estimate was compared with (available_memory())
 };
 
 class EfgModel {

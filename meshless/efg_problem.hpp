@@ -22,9 +22,10 @@ using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
 using LipTraction = std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& outward_normal)>;
 
 enum class LinearSolverKind {
-  automatic,  ///< direct when the estimated peak memory of the LU fits EfgOptions::direct_solver_memory_fraction
-  direct,     ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
-  iterative,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (for clouds too large to factorise)
+  automatic,        ///< direct when the estimated peak memory of the LU fits the available memory, else amg_krylov
+  direct,           ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
+  amg_krylov,       ///< PETSc Krylov method + algebraic multigrid (EfgOptions::amg_options); needs PETSc initialised
+  jacobi_bicgstab,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (the earlier fallback, kept for comparison)
 };
 
 /// Solver knobs with defaults; see docs/MESHLESS.md for the reasons behind each.
@@ -40,9 +41,13 @@ struct EfgOptions {
   bool variationally_consistent = true;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   /// automatic: factorise when the estimated peak memory of the LU (meshless/direct_solver_estimate.hpp, AMD on
-  /// the node pairs) is below this fraction of the physical memory; the rest is left for the model's own tables.
-  double direct_solver_memory_fraction = 0.5;
-  /// Relative residual of each BiCGSTAB solve. Newton's own test decides convergence, so a looser solve only
+  /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
+  /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.
+  double direct_solver_memory_fraction = 0.8;
+  /// PETSc options of the amg_krylov solver (its own options database; docs/MESHLESS.md §2 has the measurements
+  /// behind the choice).
+  std::string amg_options = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side right -pc_type ml";
+  /// Relative residual of each iterative solve. Newton's own test decides convergence, so a looser solve only
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.
   double iterative_tolerance = 1e-9;
   int iterative_max_iterations = 20000;
