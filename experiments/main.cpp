@@ -7,6 +7,7 @@
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/rsr_command.hpp"
 #include "experiments/solve_commands.hpp"
 #include "experiments/verify_commands.hpp"
 
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_rsr_command(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {

@@ -18,6 +18,8 @@ void write_samples_csv(const std::string& path, const ModelResult& r) {
     out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", i, x(0), x(1), x(2), u(0), u(1), u(2),
                        u.norm());
   }
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
 }
 
 nlohmann::json timings_json(const ModelResult& r) {
@@ -53,6 +55,16 @@ void write_timings_json(const std::string& path, const ModelResult& r) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
   out << timings_json(r).dump(2) << "\n";
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot open " + path + " for writing");
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
 }
 
 }  // namespace experiments

@@ -36,4 +36,8 @@ void write_samples_csv(const std::string& path, const ModelResult& result);
 nlohmann::json timings_json(const ModelResult& result);
 void write_timings_json(const std::string& path, const ModelResult& result);
 
+/// Write `text` to `path`, replacing it; throws std::runtime_error naming the file when it cannot be opened
+/// or when any byte fails to reach it (full disk, closed stream).
+void write_text_file(const std::string& path, const std::string& text);
+
 }  // namespace experiments
