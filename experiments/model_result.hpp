@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry.hpp"
+#include "reference_fem/fem_model.hpp"
+
 namespace experiments {
 
 struct StepTiming {
@@ -29,6 +32,11 @@ struct ModelResult {
   std::vector<StepTiming> steps;
   nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
 };
+
+/// The FEM reference's run as a ModelResult; `geometry_seconds` (building the geometry and the FEM mesh) is
+/// added to the set-up and total times and recorded in the details.
+ModelResult fem_model_result(const core::Geometry& geometry, const reference_fem::FemRunResult& run,
+                             double geometry_seconds);
 
 /// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|).
 void write_samples_csv(const std::string& path, const ModelResult& result);
