@@ -434,6 +434,7 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
         outcome.error = e.what();
       }
       outcome.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::replace(outcome.error.begin(), outcome.error.end(), '\n', ' ');  // one line in runs.csv and progress
       std::vector<std::string> row{run->id, outcome.ok ? "ok" : "failed"};
       for (const auto& v : run->values) row.push_back(value_text(v));
       const std::vector<std::string> values =
