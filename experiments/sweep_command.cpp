@@ -1,6 +1,7 @@
 #include "experiments/sweep_command.hpp"
 
 #include <filesystem>
+#include <stdexcept>
 
 #include "experiments/progress.hpp"
 #include "experiments/sweep.hpp"
@@ -28,7 +29,12 @@ void add_sweep_command(CLI::App& app) {
   cmd->callback([] {
     options.retry_failed = !no_retry;
     options.plot = !no_plot;
+    // Each run is a child of this very program.
     const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+    const std::string deleted = " (deleted)";
+    if (self.size() > deleted.size() && self.compare(self.size() - deleted.size(), deleted.size(), deleted) == 0)
+      throw std::runtime_error("the tissue program was replaced on disk while this sweep started (a rebuild?); "
+                               "start the sweep again");
     throw CommandResult{run_sweep_command(sweep_file, options, dry_run, self)};
   });
 }
