@@ -279,6 +279,37 @@ TEST_F(Sweep, ParallelWorkersAppendEveryRowOnceAndWhole) {
   EXPECT_EQ(ids.size(), 8u);
 }
 
+TEST_F(Sweep, ChildProcessRunsRecordTheirSummaryOrTheirError) {
+  // A stand-in program with the `tissue compare CASE --out DIR` interface writes a summary.json ...
+  const fs::path fake = dir_ / "fake_tissue.sh";
+  std::ofstream(fake) << "#!/bin/sh\nmkdir -p \"$4\"\necho 'progress line'\n"
+                         "echo '{\"n_samples\": 10, \"flagged_samples\": [], \"models\": {\"enrichment\": "
+                         "{\"rmse_mm\": 0.25}, \"visibility\": {\"rmse_mm\": 0.5}}}' > \"$4/summary.json\"\n";
+  fs::permissions(fake, fs::perms::owner_all);
+  auto spec = experiments::load_sweep(write_sweep(json::array({{{"pointer", "/material/k"}, {"values", {0.5}}}})));
+  auto report = experiments::run_sweep(spec, experiments::expand_sweep(spec), options(),
+                                       experiments::compare_in_child_process(fake.string(), false));
+  EXPECT_EQ(report.succeeded, 1);
+  auto lines = csv_lines();
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find(",ok,0.5,10,0,,,0.25,,,0.5,"), std::string::npos) << lines[1];
+
+  // ... and the real program's error line is recorded when the case fails after validation (the load point is
+  // 220 mm off the lung: a geometry check, seconds into the run).
+  spec = experiments::load_sweep(
+      write_sweep(json::array({{{"pointer", "/load/point"}, {"values", {{-300.0, 0.0, 20.0}}}}})));
+  fs::remove_all(dir_ / "out");
+  report = experiments::run_sweep(spec, experiments::expand_sweep(spec), options(),
+                                  experiments::compare_in_child_process(TISSUE_BINARY, false));
+  EXPECT_EQ(report.failed, 1);
+  lines = csv_lines();
+  ASSERT_EQ(lines.size(), 2u);
+  EXPECT_NE(lines[1].find(",failed,\"[-300.0,0.0,20.0]\","), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find("/load/point: the load point is"), std::string::npos) << lines[1];
+  EXPECT_NE(lines[1].find("(" + std::string(TISSUE_BINARY) + " exited with status 2)"), std::string::npos) << lines[1];
+  EXPECT_FALSE(fs::exists(dir_ / "out" / "runs" / (experiments::expand_sweep(spec)[0].id)));
+}
+
 TEST(CsvField, QuotesOnlyWhenNeeded) {
   EXPECT_EQ(experiments::csv_field("plain"), "plain");
   EXPECT_EQ(experiments::csv_field("[0.3,0,0]"), "\"[0.3,0,0]\"");
