@@ -86,7 +86,14 @@ json generate_case(const SweepSpec& spec, const std::vector<std::pair<std::strin
   return doc;
 }
 
-void write_json_file(const std::string& path, const json& j) { write_text_file(path, j.dump(2) + "\n"); }
+/// Write next to `path`, then rename over it: a reader or a crash never sees half a file.
+void write_replacing(const std::string& path, const std::string& text) {
+  const std::string partial = path + ".partial";
+  write_text_file(partial, text);
+  fs::rename(partial, path);
+}
+
+void write_json_file(const std::string& path, const json& j) { write_replacing(path, j.dump(2) + "\n"); }
 
 }  // namespace
 
@@ -514,8 +521,8 @@ void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& run
                       column("visibility_seconds"),
                       status == "failed" ? "failed: logs/" + run.id + ".log" : "runs/" + run.id);
   }
-  write_text_file((out / "summary.csv").string(), summary_csv);
-  write_text_file((out / "summary.md").string(), md);
+  write_replacing((out / "summary.csv").string(), summary_csv);
+  write_replacing((out / "summary.md").string(), md);
   if (!plot) return;
   const std::string log = (out / "plot.log").string();
   const ProcessOutcome p =
