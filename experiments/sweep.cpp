@@ -459,8 +459,9 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
       if (outcome.ok) {
         ++report.succeeded;
         const json& m = outcome.summary["models"];
+        const auto mm = [](const json& v) { return v.is_number() ? fmt::format("{:.4f}", v.get<double>()) : v.dump(); };
         progress.step(fmt::format("{} ({}): ok, RMSE enrichment {} mm, visibility {} mm, {:.0f} s", run->id,
-                                  describe(*run), m["enrichment"]["rmse_mm"].dump(), m["visibility"]["rmse_mm"].dump(),
+                                  describe(*run), mm(m["enrichment"]["rmse_mm"]), mm(m["visibility"]["rmse_mm"]),
                                   outcome.wall_seconds));
       } else {
         ++report.failed;
