@@ -514,7 +514,7 @@ void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& run
     const auto column = [&](const std::string& name) {
       const auto& cols = compare_row_columns();
       const std::string& v = values[static_cast<std::size_t>(std::find(cols.begin(), cols.end(), name) - cols.begin())];
-      return v.empty() ? std::string("–") : v;
+      return v.empty() ? std::string("–") : fmt::format("{:.4g}", std::stod(v));  // full precision in summary.csv
     };
     md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {} | {} |\n", row[1], column("enrichment_rmse_mm"),
                       column("visibility_rmse_mm"), column("enrichment_rmse_relative"),
