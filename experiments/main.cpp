@@ -7,8 +7,11 @@
 
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
+#include "experiments/compare_command.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/rsr_command.hpp"
 #include "experiments/solve_commands.hpp"
+#include "experiments/sweep_command.hpp"
 #include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
@@ -20,6 +23,9 @@ int main(int argc, char** argv) {
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_compare_command(app);
+  experiments::add_sweep_command(app);
+  experiments::add_rsr_command(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/geometry.hpp"
+#include "reference_fem/fem_model.hpp"
 
 namespace experiments {
 
@@ -36,6 +37,11 @@ struct ModelResult {
   nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
 };
 
+/// The FEM reference's run as a ModelResult; `geometry_seconds` (building the geometry and the FEM mesh) is
+/// added to the set-up and total times and recorded in the details.
+ModelResult fem_model_result(const core::Geometry& geometry, const reference_fem::FemRunResult& run,
+                             double geometry_seconds);
+
 /// Fill sample_cut_distance and sample_lip from the geometry's cut (nothing without one).
 void describe_samples_near_cut(const core::Geometry& geometry, ModelResult* result);
 
@@ -45,5 +51,9 @@ void write_samples_csv(const std::string& path, const ModelResult& result);
 /// timings.json: setup, totals and per-step timings with Newton iterations and residuals.
 nlohmann::json timings_json(const ModelResult& result);
 void write_timings_json(const std::string& path, const ModelResult& result);
+
+/// Write `text` to `path`, replacing it; throws std::runtime_error naming the file when it cannot be opened
+/// or when any byte fails to reach it (full disk, closed stream).
+void write_text_file(const std::string& path, const std::string& text);
 
 }  // namespace experiments

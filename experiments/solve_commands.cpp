@@ -37,37 +37,6 @@ void print_summary(const ModelResult& r) {
                            r.model, r.steps.size(), iterations, max_u * 1e3, r.total_seconds);
 }
 
-ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
-  ModelResult r;
-  r.model = "fem";
-  r.sample_points = g.sample_points;
-  describe_samples_near_cut(g, &r);
-  r.sample_displacements = f.sample_displacements;
-  r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
-  r.total_seconds = setup + f.total_seconds;
-  int factorizations = 0;
-  for (const auto& s : f.steps) {
-    r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
-                       s.residuals, s.linear_iterations});
-    factorizations += s.factorizations;
-  }
-  r.details["lu_factorizations"] = factorizations;
-  r.details["linear_solver"] = "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)";
-  r.details["n_dofs"] = f.n_dofs;
-  r.details["n_cells"] = f.n_cells;
-  r.details["load_area_mm2"] = f.load_area * 1e6;
-  r.details["crack_faces"] = f.crack_faces;
-  r.details["probe_strain"] = {{"measure", "largest absolute principal strain within the load radius of the load centre"},
-                               {"mean", f.probe_strain.mean},
-                               {"peak", f.probe_strain.peak}};
-  r.details["geometry_seconds"] = setup;
-  r.details["timer_sections_seconds"] = f.sections;
-  std::vector<double> offsets_mm;
-  for (double o : f.sample_offsets) offsets_mm.push_back(o * 1e3);
-  r.details["sample_offsets_mm"] = offsets_mm;
-  return r;
-}
-
 /// The case's geometry with one of its two discretisations, timed (the set-up cost of the model).
 core::Geometry build_timed_geometry(const core::Case& c, bool fem, Progress* progress, double* seconds) {
   progress->step(fem ? "building geometry and the FEM mesh (Gmsh)" : "building geometry and the node cloud (Gmsh)");
@@ -96,7 +65,7 @@ int run_solve_fem(const std::string& config, const std::string& out_dir) {
                               s.factorizations, s.residuals.back()));
   };
   const reference_fem::FemRunResult f = reference_fem::run_case(c, g, run);
-  const ModelResult r = to_model_result(g, f, geometry_seconds);
+  const ModelResult r = fem_model_result(g, f, geometry_seconds);
   write_model_files(out, c, r);
   out.commit();
   progress.done();
