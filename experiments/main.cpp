@@ -9,6 +9,7 @@
 #include "experiments/case_commands.hpp"
 #include "experiments/compare_command.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/reproduce_command.hpp"
 #include "experiments/rsr_command.hpp"
 #include "experiments/solve_commands.hpp"
 #include "experiments/sweep_command.hpp"
@@ -26,6 +27,7 @@ int main(int argc, char** argv) {
   experiments::add_compare_command(app);
   experiments::add_sweep_command(app);
   experiments::add_rsr_command(app);
+  experiments::add_reproduce_command(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {
