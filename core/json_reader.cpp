@@ -31,6 +31,12 @@ const nlohmann::json& JsonReader::value(const std::string& key) const {
   return *it;
 }
 
+const nlohmann::json& JsonReader::array(const std::string& key, int min_count, const std::string& expected) const {
+  const nlohmann::json& v = value(key);
+  if (!v.is_array() || static_cast<int>(v.size()) < min_count) fail(key, expected);
+  return v;
+}
+
 JsonReader JsonReader::object(const std::string& key) const {
   return JsonReader(file_, value(key), path_of(key));
 }

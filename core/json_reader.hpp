@@ -39,6 +39,8 @@ class JsonReader {
   Eigen::Vector3d vector3(const std::string& key) const;
   Eigen::Vector3d vector3(const std::string& key, const Eigen::Vector3d& fallback) const;
   std::vector<Eigen::Vector3d> vector3_list(const std::string& key, int min_count) const;
+  /// An array of at least `min_count` elements, for the caller to read element by element ("/key/i").
+  const nlohmann::json& array(const std::string& key, int min_count, const std::string& expected) const;
 
   /// Reject keys that were never asked for.
   void finish() const;

@@ -24,7 +24,8 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   p.threads = options.threads;
   ViscoelasticSolver solver(triangulation, p, conditions);
   solver.setup_system();
-  const SampleEvaluator samples(solver.mapping(), solver.dof_handler(), sample_points, options.sample_tolerance);
+  const SampleEvaluator samples(solver.mapping(), solver.dof_handler(), sample_points, options.sample_tolerance,
+                                options.cut);
 
   FemRunResult result;
   result.n_dofs = solver.dof_handler().n_dofs();
@@ -47,6 +48,8 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   result.vertex_displacements = vertex_displacements(solver.dof_handler(), solver.solution());
   if (options.probe_radius > 0.0) result.probe_strain = solver.strain_in_ball(options.probe_centre, options.probe_radius);
   result.smallest_margin = solver.smallest_margin();
+  result.material_k = parameters.material.k;
+  result.min_step = parameters.newton.min_step;
   result.sections = solver.section_seconds();
   result.total_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;
@@ -70,6 +73,7 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
   parameters.newton.min_step = program.min_step;
 
   FemRunOptions run = options;
+  if (!run.cut && geometry.cut) run.cut = &*geometry.cut;
   if (!(run.probe_radius > 0.0)) {
     run.probe_centre = geometry.load_centre;
     run.probe_radius = c.load.radius;

@@ -20,6 +20,8 @@ struct FemRunOptions {
   double sample_tolerance = 3e-3;  ///< [m] how far a sample may lie outside the faceted mesh
   unsigned int threads = 2;
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
+  /// When not null, samples behind the crack front are evaluated on the lip core::RuledSurface::side gives them.
+  const core::RuledSurface* cut = nullptr;
   /// When radius > 0, measure the strain within this ball at the last step (FemRunResult::probe_strain).
   Eigen::Vector3d probe_centre = Eigen::Vector3d::Zero();  ///< [m]
   double probe_radius = 0.0;                               ///< [m]
@@ -40,6 +42,8 @@ struct FemRunResult {
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
   BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
   core::SmallestMargin smallest_margin;  ///< smallest 1 + 2k lambda over the converged steps, and where
+  double material_k = 0.0;  ///< the law's k, which sets the limit -1/(2k) of smallest_margin
+  double min_step = 0.0;    ///< [s] the smallest step a failed step could be cut back to (0: no cut-back)
 };
 
 /// Solve on any tagged tet mesh (boundary ids = core::FaceTag values) with explicit conditions and

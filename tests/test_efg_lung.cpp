@@ -1,4 +1,4 @@
-// Smoke run of the EFG model on the built-in lung (configs/lung_small.json): the whole load case runs, every
+// Smoke run of the EFG model on the built-in lung (configs/ci/lung_small_ci.json, the CI-sized lung_small): the whole load case runs, every
 // step's Newton iteration converges, nothing is NaN, and the sample points move by a few millimetres.
 #include <gtest/gtest.h>
 
@@ -12,9 +12,9 @@ namespace meshless {
 namespace {
 
 TEST(EfgLung, SmallCaseRunsAndConverges) {
-  core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
+  core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
   // Two steps (ramp to full load at t = 1 s) keep the smoke run short: each full-Newton step factorises the
-  // ~11k-DOF tangent 3-4 times.
+  // tangent 3-4 times.
   c.time.total = 1.0;
   c.time.steps = 2;
   core::GeometryOptions options;

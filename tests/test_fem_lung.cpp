@@ -1,4 +1,4 @@
-// Smoke test of the FEM reference on the built-in lung (configs/lung_small.json, paper §5.4): Newton
+// Smoke test of the FEM reference on the built-in lung (configs/ci/lung_small_ci.json, the CI-sized lung_small, paper §5.4): Newton
 // converges at every step, the sample displacements are finite and a few millimetres.
 #include <gtest/gtest.h>
 
@@ -13,10 +13,9 @@ namespace reference_fem {
 namespace {
 
 TEST(FemLung, SmallCaseConvergesWithMillimetreDisplacements) {
-  core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
+  core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
   core::GeometryOptions options;
   options.build_node_cloud = false;
-  options.fem_mesh_size = 0.016;  // coarse, to keep the suite fast
   const core::Geometry g = core::build_geometry(c, options);
   const FemRunResult r = run_case(c, g);
   ASSERT_EQ(static_cast<int>(r.steps.size()), c.time.steps);

@@ -1,0 +1,296 @@
+#include "experiments/reproduce.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "core/json_reader.hpp"
+#include "core/output_directory.hpp"
+#include "experiments/compare.hpp"
+#include "experiments/compare_subprocess.hpp"
+#include "experiments/meshless_runs.hpp"
+#include "experiments/model_result.hpp"
+#include "experiments/progress.hpp"
+#include "reference_fem/fem_model.hpp"
+
+namespace experiments {
+
+using json = nlohmann::json;
+
+namespace {
+
+json read_json_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw core::CaseError(file, "", "a readable JSON file (it could not be opened)");
+  try {
+    return json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw core::CaseError(file, "", std::string("valid JSON (") + e.what() + ")");
+  }
+}
+
+/// A case path of the plan, relative to the plan's folder; it must exist.
+std::string resolve_case(const core::JsonReader& r, const std::string& key, const std::string& plan_file) {
+  const std::filesystem::path p =
+      std::filesystem::path(plan_file).parent_path() / std::filesystem::path(r.string(key));
+  if (!std::filesystem::is_regular_file(p))
+    r.fail(key, fmt::format("a case file relative to the plan's folder ({} does not exist)", p.string()));
+  return p.lexically_normal().string();
+}
+
+/// The Table 1 RMSEs of one `tissue compare` summary.json, with the paper's beside them.
+json table1_row(const ReproducePlan::Table1Case& t, const json& summary) {
+  const json& m = summary.at("models");
+  auto rmse = [&](const char* variant, const char* key) { return m.at(variant).at(key); };
+  return {{"label", t.label},
+          {"config", t.config},
+          {"peak_reference_mm", summary.at("reference").at("peak_sample_displacement_mm")},
+          {"enrichment_mm", rmse("enrichment", "rmse_mm")},
+          {"visibility_mm", rmse("visibility", "rmse_mm")},
+          {"difference_mm", summary.at("difference_mm")},
+          {"enrichment_relative", rmse("enrichment", "rmse_relative_to_peak")},
+          {"visibility_relative", rmse("visibility", "rmse_relative_to_peak")},
+          {"enrichment_unflagged_mm", rmse("enrichment", "rmse_unflagged_mm")},
+          {"visibility_unflagged_mm", rmse("visibility", "rmse_unflagged_mm")},
+          {"flagged_samples", summary.at("flagged_samples")},
+          {"reference_error_bar", summary.at("reference").at("error_bar")},
+          {"paper_enrichment_mm", t.paper_enrichment_mm},
+          {"paper_visibility_mm", t.paper_visibility_mm},
+          {"paper_difference_mm", t.paper_enrichment_mm - t.paper_visibility_mm}};
+}
+
+std::string number_or_dash(const json& v, const char* format) {
+  return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : std::string("–");
+}
+
+std::string table1_md(const json& rows) {
+  std::string md =
+      "# Table 1: RMSE of the sample displacements against the FEM reference (eq. 34)\n\n"
+      "| case | enrichment (proposed) [mm] | visibility (baseline) [mm] | difference [mm] | relative to peak "
+      "(enr. / vis.) | without flagged samples (enr. / vis.) [mm] | reference error bar | paper: proposed / "
+      "baseline / difference [mm] |\n|---|---|---|---|---|---|---|---|\n";
+  for (const json& r : rows) {
+    const json& bar = r.at("reference_error_bar");
+    const std::string error_bar = bar.value("known", false)
+                                      ? fmt::format("{:.3f} mm ({})", bar.at("rms_mm").get<double>(),
+                                                    bar.value("method", std::string()))
+                                      : "unknown: " + bar.value("why_unknown", std::string());
+    md += fmt::format("| {} | {:.4f} | {:.4f} | {:+.4f} | {:.1f} % / {:.1f} % | {} / {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
+                      r.at("label").get<std::string>(), r.at("enrichment_mm").get<double>(),
+                      r.at("visibility_mm").get<double>(), r.at("difference_mm").get<double>(),
+                      100 * r.at("enrichment_relative").get<double>(), 100 * r.at("visibility_relative").get<double>(),
+                      number_or_dash(r.at("enrichment_unflagged_mm"), "{:.4f}"),
+                      number_or_dash(r.at("visibility_unflagged_mm"), "{:.4f}"), error_bar,
+                      r.at("paper_enrichment_mm").get<double>(), r.at("paper_visibility_mm").get<double>(),
+                      r.at("paper_difference_mm").get<double>());
+  }
+  md += "\nThe paper's figures are for its stomach and heart models; ours are for the cases named in the plan, so "
+        "compare the ranking and the relative size of the two models, not the millimetres. Each case's full "
+        "comparison (per-sample errors, flags, timings, radar diagram) is in its sub-folder.\n";
+  return md;
+}
+
+/// The timing case at force magnitude `magnitude` along the case's force direction, with `steps` time steps.
+core::Case case_at_force(const core::Case& base, double magnitude, int steps) {
+  json doc = base.document;
+  const Eigen::Vector3d direction = base.load.force.normalized();
+  doc["load"]["force"] = {magnitude * direction(0), magnitude * direction(1), magnitude * direction(2)};
+  doc["time"]["steps"] = steps;
+  if (doc.contains("cut") && doc["cut"].contains("steps")) doc["cut"]["steps"] = 1;
+  doc["output"]["vtu"] = false;
+  return core::parse_case(doc, base.source_file);
+}
+
+double peak_sample_mm(const Eigen::MatrixXd& u) { return u.rowwise().norm().maxCoeff() * 1e3; }
+
+int newton_iterations(const ModelResult& r) {
+  int n = 0;
+  for (const StepTiming& s : r.steps) n += s.iterations;
+  return n;
+}
+
+json time_one_force(const core::Case& c, const core::Geometry& g, double force, Progress* progress) {
+  json row = {{"force_N", force}};
+  try {
+    progress->step(fmt::format("{:.2f} N: meshless (enrichment), full solve", force));
+    const ModelResult efg = solve_meshless(c, g, std::string());
+    row["meshless"] = {{"seconds", efg.total_seconds},
+                       {"setup_seconds", efg.setup_seconds},
+                       {"newton_iterations", newton_iterations(efg)},
+                       {"peak_sample_mm", peak_sample_mm(efg.sample_displacements)}};
+  } catch (const std::exception& e) {
+    row["meshless"] = {{"error", e.what()}};
+  }
+  try {
+    progress->step(fmt::format("{:.2f} N: FEM reference", force));
+    reference_fem::FemRunOptions options;
+    const ModelResult fem = fem_model_result(g, reference_fem::run_case(c, g, options), 0.0);
+    row["fem"] = {{"seconds", fem.total_seconds},
+                  {"setup_seconds", fem.setup_seconds},
+                  {"newton_iterations", newton_iterations(fem)},
+                  {"peak_sample_mm", peak_sample_mm(fem.sample_displacements)}};
+  } catch (const std::exception& e) {
+    row["fem"] = {{"error", e.what()}};
+  }
+  return row;
+}
+
+std::string timing_cell(const json& model) {
+  if (model.contains("error")) return "failed: " + model.at("error").get<std::string>();
+  return fmt::format("{:.2f} s ({} Newton, peak {:.3f} mm)", model.at("seconds").get<double>(),
+                     model.at("newton_iterations").get<int>(), model.at("peak_sample_mm").get<double>());
+}
+
+std::string timing_md(const json& timing) {
+  std::string md = fmt::format(
+      "# Fig. 9 analogue: the time to compute one deformation result\n\n"
+      "Case `{}`, {} time step(s) per result, forces along the case's force direction at its load point. Each "
+      "time is the model's whole run for that force (set-up, assembly and solves), geometry excluded (built once: "
+      "{:.1f} s).\n\n| force [N] | meshless, full solve | FEM reference | meshless / FEM | surrogate query |\n"
+      "|---|---|---|---|---|\n",
+      timing.at("config").get<std::string>(), timing.at("steps").get<int>(),
+      timing.at("geometry_seconds").get<double>());
+  for (const json& r : timing.at("rows")) {
+    const json& efg = r.at("meshless");
+    const json& fem = r.at("fem");
+    const std::string ratio = efg.contains("seconds") && fem.contains("seconds")
+                                  ? fmt::format("{:.2f}", efg.at("seconds").get<double>() / fem.at("seconds").get<double>())
+                                  : std::string("–");
+    md += fmt::format("| {:.2f} | {} | {} | {} | {} |\n", r.at("force_N").get<double>(), timing_cell(efg),
+                      timing_cell(fem), ratio, timing.at("surrogate").at("status").get<std::string>());
+  }
+  md += "\nThe ratio is measured in this run, on this machine: compare it, not the absolute seconds.\n";
+  return md;
+}
+
+void plot_timing(const core::OutputDirectory& out, json* timing) {
+  const std::string log = out.file("plot_timing.log").string();
+  const ProcessOutcome p = run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_timing.py",
+                                        out.file("timing.json").string(), out.file("timing.png").string()},
+                                       log);
+  if (p.ok()) {
+    std::filesystem::remove(log);
+    (*timing)["timing_png"] = "timing.png";
+    return;
+  }
+  std::filesystem::remove(out.file("timing.png"));
+  std::cerr << "warning: timing.png not written (" << p.error << "); see plot_timing.log\n";
+  (*timing)["timing_png"] = nullptr;
+  (*timing)["plot_error"] = p.error;
+}
+
+}  // namespace
+
+ReproducePlan load_reproduce_plan(const std::string& file) {
+  const json doc = read_json_file(file);
+  core::JsonReader root(file, doc, "");
+  ReproducePlan plan;
+  plan.file = file;
+  root.string("description", std::string());
+  const json& table1 =
+      root.array("table1", 1, "a non-empty array of {label, config, paper: {enrichment_mm, visibility_mm}}");
+  for (std::size_t i = 0; i < table1.size(); ++i) {
+    core::JsonReader t(file, table1[i], fmt::format("/table1/{}", i));
+    ReproducePlan::Table1Case row;
+    row.label = t.string("label");
+    if (row.label.empty() || row.label.find_first_of("/\\") != std::string::npos)
+      t.fail("label", "a non-empty name without slashes (it names the case's sub-folder)");
+    row.config = resolve_case(t, "config", file);
+    const core::JsonReader paper = t.object("paper");
+    row.paper_enrichment_mm = paper.in_range("enrichment_mm", 0.0, 1e3, true, true);
+    row.paper_visibility_mm = paper.in_range("visibility_mm", 0.0, 1e3, true, true);
+    paper.finish();
+    t.finish();
+    for (const auto& other : plan.table1)
+      if (other.label == row.label) t.fail("label", "a label no other Table 1 case has");
+    plan.table1.push_back(row);
+  }
+  const core::JsonReader timing = root.object("timing");
+  plan.timing.config = resolve_case(timing, "config", file);
+  plan.timing.steps = timing.integer("steps", 1, 100, 1);
+  const json& forces = timing.array("forces_N", 1, "a non-empty array of force magnitudes in (0, 100] N");
+  for (std::size_t i = 0; i < forces.size(); ++i) {
+    if (!forces[i].is_number() || !(forces[i].get<double>() > 0.0) || forces[i].get<double>() > 100.0)
+      throw core::CaseError(file, fmt::format("/timing/forces_N/{}", i), "a force magnitude in (0, 100] N");
+    plan.timing.forces.push_back(forces[i].get<double>());
+  }
+  timing.finish();
+  root.finish();
+  return plan;
+}
+
+bool ReproduceOptions::IsValid(std::string* why) const {
+  if (out_dir.empty()) return *why = "--out must not be empty", false;
+  if (!table1 && !timing) return *why = "--table1-only and --timing-only exclude each other", false;
+  return true;
+}
+
+int run_reproduce(const ReproduceOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("reproduce: " + why);
+  const ReproducePlan plan = load_reproduce_plan(options.plan);
+  // Every case is read (and rejected) before anything runs.
+  std::vector<core::Case> cases;
+  for (const auto& t : plan.table1) cases.push_back(core::load_case(t.config));
+  const core::Case timing_case = core::load_case(plan.timing.config);
+  if (timing_case.load.force.norm() == 0.0)
+    throw core::CaseError(plan.timing.config, "/load/force", "a non-zero force (its direction is the timing's)");
+  for (double f : plan.timing.forces) case_at_force(timing_case, f, plan.timing.steps);
+
+  const int n_forces = static_cast<int>(plan.timing.forces.size());
+  Progress progress("reproduce", (options.table1 ? static_cast<int>(plan.table1.size()) : 0) +
+                                     (options.timing ? 2 + 2 * n_forces : 0) + 1);
+  core::OutputDirectory out(options.out_dir);
+  write_text_file(out.file("plan.json").string(), read_json_file(options.plan).dump(2) + "\n");
+
+  if (options.table1) {
+    json rows = json::array();
+    for (const auto& t : plan.table1) {
+      progress.step(fmt::format("Table 1, {}: tissue compare {}", t.label, t.config));
+      CompareOptions compare;
+      compare.out_dir = out.file(t.label).string();
+      compare.plot = options.plot;
+      if (const int code = run_compare(t.config, compare); code != 0)
+        throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
+      rows.push_back(table1_row(t, read_json_file(out.file(t.label + "/summary.json").string())));
+    }
+    write_text_file(out.file("table1.json").string(), json{{"rows", rows}}.dump(2) + "\n");
+    const std::string md = table1_md(rows);
+    write_text_file(out.file("table1.md").string(), md);
+    std::cout << md << "\n";
+  }
+
+  if (options.timing) {
+    progress.step(fmt::format("timing: geometry of {} (built once for every force)", plan.timing.config));
+    const double t0 = progress.elapsed_seconds();
+    const core::Geometry g = core::build_geometry(timing_case);
+    json timing = {{"config", plan.timing.config},
+                   {"steps", plan.timing.steps},
+                   {"geometry_seconds", progress.elapsed_seconds() - t0},
+                   {"surrogate",
+                    {{"status", "not measured: `tissue reproduce` has no surrogate query yet (docs/EXPERIMENTS.md)"}}},
+                   {"rows", json::array()}};
+    for (double f : plan.timing.forces)
+      timing["rows"].push_back(time_one_force(case_at_force(timing_case, f, plan.timing.steps), g, f, &progress));
+    progress.step("timing: tables and timing.png (scripts/plot_timing.py)");
+    write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    if (options.plot) plot_timing(out, &timing);
+    write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    const std::string md = timing_md(timing);
+    write_text_file(out.file("timing.md").string(), md);
+    std::cout << md << "\n";
+  }
+  out.commit();
+  progress.done();
+  std::cout << fmt::format("wrote {} in {:.0f} s\n", out.destination().string(), progress.elapsed_seconds());
+  return 0;
+}
+
+}  // namespace experiments

@@ -1,0 +1,51 @@
+#pragma once
+// `tissue reproduce`: the paper's Table 1 (§5.4: the RMSE of the proposed model and of the baseline meshless
+// cutting model against the FEM reference) and the analogue of its Fig. 9 (§5.5: the time to compute one
+// deformation result for 8 forces in 0-4 N at one stressed point), on the cases a plan file names.
+//
+// Files written to the output folder (default results/reproduce/, written atomically; docs/EXPERIMENTS.md):
+//   plan.json            the plan as run
+//   table1.md/.json      our RMSEs beside the paper's, with the reference's error bar
+//   <label>/             each Table 1 case's full `tissue compare` folder
+//   timing.md/.json      per force: the full meshless solve and the FEM reference
+//   timing.png           the timing as grouped bars (scripts/plot_timing.py)
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace experiments {
+
+/// What `tissue reproduce` runs (configs/reproduce.json). Case paths are relative to the plan's folder.
+struct ReproducePlan {
+  struct Table1Case {
+    std::string label;   ///< row label and sub-folder, e.g. "small deformation"
+    std::string config;  ///< the case, resolved to a path
+    double paper_enrichment_mm = 0.0;  ///< the paper's Table 1: proposed model
+    double paper_visibility_mm = 0.0;  ///< the paper's Table 1: interactive meshless cutting model
+  };
+  struct Timing {
+    std::string config;          ///< the case whose load point is stressed, resolved to a path
+    std::vector<double> forces;  ///< force magnitudes [N] along the case's force direction
+    int steps = 1;               ///< time steps per deformation result (replaces /time/steps)
+  };
+  std::string file;
+  std::vector<Table1Case> table1;
+  Timing timing;
+};
+
+/// Read and check a plan; errors are core::CaseError naming the file and the JSON pointer.
+ReproducePlan load_reproduce_plan(const std::string& file);
+
+struct ReproduceOptions {
+  std::string plan = "configs/reproduce.json";
+  std::string out_dir = "results/reproduce";
+  bool plot = true;
+  bool table1 = true;  ///< false: the timing only
+  bool timing = true;  ///< false: Table 1 only
+  bool IsValid(std::string* why) const;
+};
+
+/// `tissue reproduce`; returns the exit code.
+int run_reproduce(const ReproduceOptions& options);
+
+}  // namespace experiments

@@ -1,0 +1,72 @@
+// `tissue reproduce`: the plan file is checked before anything runs, and the shipped plan is the paper's.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "core/case_error.hpp"
+#include "experiments/reproduce.hpp"
+
+namespace {
+
+const std::string kConfigDir = TISSUE_TEST_CONFIG_DIR;
+
+/// Write `text` as a plan in the configs folder's sibling temp folder and return its path.
+std::string write_plan(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "tissue_reproduce_plans";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / (name + ".json");
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+std::string error_of(const std::string& plan) {
+  try {
+    experiments::load_reproduce_plan(plan);
+  } catch (const core::CaseError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+std::string plan_text(const std::string& config, const std::string& forces, const std::string& second_label) {
+  return "{\"table1\": [{\"label\": \"small\", \"config\": \"" + config +
+         "\", \"paper\": {\"enrichment_mm\": 1.05, \"visibility_mm\": 4.01}}, {\"label\": \"" + second_label +
+         "\", \"config\": \"" + config + "\", \"paper\": {\"enrichment_mm\": 4.04, \"visibility_mm\": 8.03}}], "
+         "\"timing\": {\"config\": \"" + config + "\", \"forces_N\": " + forces + "}}";
+}
+
+}  // namespace
+
+TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
+  const experiments::ReproducePlan plan = experiments::load_reproduce_plan(kConfigDir + "/reproduce.json");
+  ASSERT_EQ(plan.table1.size(), 2u);
+  EXPECT_DOUBLE_EQ(plan.table1[0].paper_enrichment_mm, 1.05);  // paper Table 1, small deformation
+  EXPECT_DOUBLE_EQ(plan.table1[0].paper_visibility_mm, 4.01);
+  EXPECT_DOUBLE_EQ(plan.table1[1].paper_enrichment_mm, 4.04);  // cutting
+  EXPECT_DOUBLE_EQ(plan.table1[1].paper_visibility_mm, 8.03);
+  EXPECT_TRUE(std::filesystem::exists(plan.table1[1].config)) << plan.table1[1].config;
+  // Fig. 9: 8 groups of forces within 0-4 N at one stressed point.
+  ASSERT_EQ(plan.timing.forces.size(), 8u);
+  for (double f : plan.timing.forces) {
+    EXPECT_GT(f, 0.0);
+    EXPECT_LE(f, 4.0);
+  }
+}
+
+TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {
+  const std::string lung = std::filesystem::absolute(kConfigDir + "/lung_small.json").string();
+  const std::string missing = write_plan("missing", plan_text("no_such_case.json", "[1.0]", "large"));
+  EXPECT_NE(error_of(missing).find("/table1/0/config"), std::string::npos) << error_of(missing);
+  EXPECT_NE(error_of(missing).find("missing.json"), std::string::npos) << error_of(missing);
+
+  const std::string bad_force = write_plan("bad_force", plan_text(lung, "[1.0, 2.0, -0.5]", "large"));
+  EXPECT_NE(error_of(bad_force).find("/timing/forces_N/2"), std::string::npos) << error_of(bad_force);
+
+  const std::string twice = write_plan("twice", plan_text(lung, "[1.0]", "small"));
+  EXPECT_NE(error_of(twice).find("/table1/1/label"), std::string::npos) << error_of(twice);
+
+  const std::string not_json = write_plan("not_json", "{\"table1\": [");
+  EXPECT_NE(error_of(not_json).find("valid JSON"), std::string::npos) << error_of(not_json);
+}
