@@ -243,7 +243,7 @@ TEST(ShippedCases, CaseMeshWritesVtuAndTheConfig) {
 
 TEST(Cli, HelpOnEverySubcommand) {
   for (const char* sub : {"", "case", "case check", "case mesh", "solve", "solve fem", "solve meshless", "cut", "verify",
-                          "verify fem", "verify meshless"}) {
+                          "verify fem", "verify meshless", "compare", "sweep", "rsr", "reproduce"}) {
     const RunResult r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub << "\n" << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
