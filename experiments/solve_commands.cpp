@@ -76,6 +76,22 @@ int run_solve_fem(const std::string& config, const std::string& out_dir) {
   return 0;
 }
 
+/// The end of `solve meshless` and `cut`: the geometry's time counted as set-up, the samples' distances to the cut,
+/// the files written and committed, the summary printed.
+int finish_meshless_run(const core::Case& c, const core::Geometry& g, double geometry_seconds, ModelResult* r,
+                        core::OutputDirectory* out, Progress* progress) {
+  r->details["geometry_seconds"] = geometry_seconds;
+  describe_samples_near_cut(g, r);
+  r->setup_seconds += geometry_seconds;
+  r->total_seconds += geometry_seconds;
+  write_model_files(*out, c, *r);
+  out->commit();
+  progress->done();
+  print_summary(*r);
+  std::cout << fmt::format("wrote {}\n", out->destination().string());
+  return 0;
+}
+
 int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   const core::Case c = core::load_case(config);
   Progress progress("solve meshless", 3 + c.time.steps);
@@ -84,16 +100,7 @@ int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
   ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); });
-  r.details["geometry_seconds"] = geometry_seconds;
-  describe_samples_near_cut(g, &r);
-  r.setup_seconds += geometry_seconds;
-  r.total_seconds += geometry_seconds;
-  write_model_files(out, c, r);
-  out.commit();
-  progress.done();
-  print_summary(r);
-  std::cout << fmt::format("wrote {}\n", out.destination().string());
-  return 0;
+  return finish_meshless_run(c, g, geometry_seconds, &r, &out, &progress);
 }
 
 /// `tissue cut`: the EFG model with the case's incision made progressively, as a scalpel does (/cut/steps
@@ -112,16 +119,7 @@ int run_cut(const std::string& config, const std::string& out_dir) {
   const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
   ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); }, {}, /*progressive_cut=*/true);
-  r.details["geometry_seconds"] = geometry_seconds;
-  describe_samples_near_cut(g, &r);
-  r.setup_seconds += geometry_seconds;
-  r.total_seconds += geometry_seconds;
-  write_model_files(out, c, r);
-  out.commit();
-  progress.done();
-  print_summary(r);
-  std::cout << fmt::format("wrote {}\n", out.destination().string());
-  return 0;
+  return finish_meshless_run(c, g, geometry_seconds, &r, &out, &progress);
 }
 
 }  // namespace
