@@ -5,6 +5,8 @@
 // Ratios within one run: full set-up / local update; how each grows with the node count.
 #include <benchmark/benchmark.h>
 
+#include <deal.II/base/mpi.h>
+
 #include <memory>
 
 #include "meshless/efg_model.hpp"
@@ -63,4 +65,14 @@ void BM_CutLocalUpdate(benchmark::State& state) {
 
 BENCHMARK(BM_CutFullSetUp)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_CutLocalUpdate)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  // A cloud too large to factorise gets the AMG-Krylov solver at set-up, which needs MPI and PETSc initialised;
+  // only the program name is passed on, so that PETSc does not read Google Benchmark's flags.
+  int petsc_argc = 1;
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
