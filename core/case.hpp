@@ -75,11 +75,14 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
-  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default,
-  /// node_spacing / 50, keeps the shape functions continuous at the front and costs no accuracy against the FEM crack
-  /// (docs/MESHLESS.md §5: at l comparable to the Gauss-point spacing it stiffens the crack).
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default, 0, is the
+  /// paper's function as it stands: the shape functions jump across the front line itself (a set no Gauss point
+  /// meets). l > 0 makes them continuous there, at a cost (docs/MESHLESS.md §5.2): l comparable to the Gauss-point
+  /// spacing stiffens the crack, and l far below it puts gradients of 1/l at the few points inside the transition,
+  /// which took the nonlinear law out of its admissible range on the cracked lung (configs/ci/lung_large_ci.json,
+  /// l = spacing / 50: Newton diverged in step 3; l = 0 converged).
   double front_transition = 0.012 * kFrontTransitionPerSpacing;
-  static constexpr double kFrontTransitionPerSpacing = 0.02;
+  static constexpr double kFrontTransitionPerSpacing = 0.0;
 };
 
 struct FemSpec {
