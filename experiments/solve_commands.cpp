@@ -57,6 +57,7 @@ ModelResult to_model_result(const core::Case& c, const core::Geometry& g, const 
           : "GMRES (right-preconditioned by Trilinos ML smoothed-aggregation AMG of an earlier consistent tangent, "
             "rigid-body near null space)";
   r.details["mpi_processes"] = f.mpi_processes;
+  r.details["cells_per_process"] = f.cells_per_process;
   r.details["peak_memory_mb"] = f.peak_memory_mb;
   r.details["n_dofs"] = f.n_dofs;
   r.details["n_cells"] = f.n_cells;

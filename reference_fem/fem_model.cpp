@@ -39,6 +39,8 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   result.n_dofs = solver.dof_handler().n_dofs();
   result.n_cells = triangulation.n_global_active_cells();
   result.mpi_processes = static_cast<int>(dealii::Utilities::MPI::n_mpi_processes(options.communicator));
+  result.cells_per_process =
+      dealii::Utilities::MPI::all_gather(options.communicator, triangulation.n_locally_owned_active_cells());
   result.sample_offsets = samples.offsets();
   const int every = std::max(1, output_every);
   const int n_steps = static_cast<int>(times.size());

@@ -49,6 +49,7 @@ struct FemRunResult {
   int crack_faces = 0;     ///< boundary faces tagged FaceTag::crack (both sides of the cut)
   std::vector<std::string> vtu_files;  ///< the pvtu records
   int mpi_processes = 1;
+  std::vector<unsigned int> cells_per_process;  ///< locally owned cells of each process (the partition)
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
   BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
 };

@@ -113,17 +113,23 @@ struct ViscoelasticSolver::ScratchData {
               const Quadrature<2>& face_quadrature)
       : fe_values(mapping, fe, quadrature, update_gradients | update_JxW_values),
         fe_face_values(mapping, fe, face_quadrature, update_values | update_quadrature_points | update_JxW_values),
-        strains(quadrature.size()) {}
+        strains(quadrature.size()),
+        B(6 * quadrature.size(), fe.n_dofs_per_cell()),
+        DB(6 * quadrature.size(), fe.n_dofs_per_cell()) {}
   ScratchData(const ScratchData& other)
       : fe_values(other.fe_values.get_mapping(), other.fe_values.get_fe(), other.fe_values.get_quadrature(),
                   other.fe_values.get_update_flags()),
         fe_face_values(other.fe_face_values.get_mapping(), other.fe_face_values.get_fe(),
                        other.fe_face_values.get_quadrature(), other.fe_face_values.get_update_flags()),
-        strains(other.strains.size()) {}
+        strains(other.strains.size()),
+        B(other.B.rows(), other.B.cols()),
+        DB(other.DB.rows(), other.DB.cols()) {}
 
   FEValues<3> fe_values;
   FEFaceValues<3> fe_face_values;
   std::vector<SymmetricTensor<2, 3>> strains;
+  Eigen::MatrixXd B, DB;  // the B_q and D_q B_q JxW_q of all quadrature points, stacked (6 n_q by n)
+  Eigen::MatrixXd K;
 };
 
 struct ViscoelasticSolver::CopyData {
@@ -224,24 +230,28 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
   scratch.fe_values.reinit(cell);
   scratch.fe_values[u].get_function_symmetric_gradients(ghosted_solution_, scratch.strains);
 
-  // B columns: engineering Voigt strain of each shape function, so that K = sum B^T D B JxW (eq. 21)
-  // with D = E_k dN/deps, the consistent tangent of eq. 13 (non-symmetric when k != 0).
-  Eigen::Matrix<double, 6, Eigen::Dynamic> B(6, n);
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  // B_q columns: engineering Voigt strain of each shape function at point q, so that
+  // K = sum_q B_q^T D_q B_q JxW_q (eq. 21) with D = E_k dN/deps, the consistent tangent of eq. 13
+  // (non-symmetric when k != 0). Stacked over q, K is one product B^T (DB): one large GEMM instead of n_q
+  // small ones.
+  Eigen::MatrixXd& B = scratch.B;
+  Eigen::MatrixXd& DB = scratch.DB;
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(n);
   const std::size_t first = cell->active_cell_index() * n_q_points_;
   for (unsigned int q = 0; q < n_q_points_; ++q) {
     const core::KelvinResponse response =
         law_.update(history_[first + q].state, to_voigt(scratch.strains[q]), step_dt_);
-    for (unsigned int i = 0; i < n; ++i) B.col(i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
+    const auto Bq = B.middleRows<6>(6 * q);
+    for (unsigned int i = 0; i < n; ++i) B.block<6, 1>(6 * q, i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
     const double jxw = scratch.fe_values.JxW(q);
-    K.noalias() += B.transpose() * (response.tangent * B) * jxw;
-    internal.noalias() += B.transpose() * response.stress * jxw;
+    DB.middleRows<6>(6 * q).noalias() = (response.tangent * jxw) * Bq;
+    internal.noalias() += Bq.transpose() * (response.stress * jxw);
   }
+  scratch.K.noalias() = B.transpose() * DB;
   for (unsigned int i = 0; i < n; ++i) {
     copy.cell_rhs(i) = -internal(i);
     copy.cell_internal(i) = internal(i);
-    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = K(i, j);
+    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = scratch.K(i, j);
   }
 
   // Uniform tractions (the load patch: force(t) / patch area).
@@ -315,7 +325,7 @@ void ViscoelasticSolver::build_preconditioner() {
   amg_->initialize(system_matrix_, ml_parameters(system_matrix_, *rigid_body_modes_, options));
 }
 
-void ViscoelasticSolver::solve() {
+void ViscoelasticSolver::solve(double eta) {
   TimerOutput::Scope scope(timer_, "solve");
   // The consistent tangent is non-symmetric for k != 0 (docs/MATERIAL.md §1.4), so: GMRES on the exact
   // tangent, right-preconditioned (it measures the true residual) by a preconditioner of an earlier tangent.
@@ -325,8 +335,9 @@ void ViscoelasticSolver::solve() {
   const LinearSolverParameters& linear = parameters_.newton.linear;
   if (rebuild_ || (!amg_ && !factorization_)) build_preconditioner();
   const double rhs_norm = system_rhs_.l2_norm();
-  const double target = linear.tolerance * rhs_norm;
+  const double target = eta * rhs_norm;
   int iterations = 0;
+  double reached = rhs_norm;
   const auto run_gmres = [&] {
     newton_update_ = 0.0;
     SolverControl control(static_cast<unsigned int>(linear.max_iterations), target, false, false);
@@ -338,8 +349,9 @@ void ViscoelasticSolver::solve() {
       else
         gmres.solve(system_matrix_, newton_update_, system_rhs_, UmfpackPreconditioner(*factorization_));
       iterations += static_cast<int>(control.last_step());
+      reached = control.last_value();
       return true;
-    } catch (const SolverControl::NoConvergence& e) {
+    } catch (const SolverControl::NoConvergence&) {
       iterations += static_cast<int>(control.last_step());
       return false;
     }
@@ -353,10 +365,11 @@ void ViscoelasticSolver::solve() {
           "residual by {:.0e} within {} iterations at t = {} s. The tangent may be close to singular (a strain near "
           "dN/deps = 0, docs/MATERIAL.md §1.4: reduce the load or refine the mesh under it); on a small mesh, "
           "/fem/linear_solver \"direct\" solves it exactly",
-          linear.type == LinearSolverType::amg ? "AMG" : "LU", linear.tolerance, linear.max_iterations, step_time_));
+          linear.type == LinearSolverType::amg ? "AMG" : "LU", eta, linear.max_iterations, step_time_));
   }
   last_linear_iterations_ = iterations;
-  if (iterations > linear.rebuild_after) rebuild_ = true;
+  const double decades = std::max(1.0, std::log10(rhs_norm / std::max(reached, 1e-300 * rhs_norm)));
+  if (iterations > linear.rebuild_after * decades) rebuild_ = true;
   zero_constraints_.distribute(newton_update_);
   solution_ += newton_update_;
   ghosted_solution_ = solution_;
@@ -407,7 +420,8 @@ StepReport ViscoelasticSolver::do_time_step(double t_new) {
                                std::to_string(iteration) + " iterations)");
     const auto t_solve = std::chrono::steady_clock::now();
     const int builds_before = preconditioner_builds_;
-    solve();
+    const LinearSolverParameters& linear = parameters_.newton.linear;
+    solve(std::max(linear.tolerance, std::min(0.1, linear.forcing * relative)));
     report.solve_seconds += seconds_since(t_solve);
     report.linear_iterations += last_linear_iterations_;
     report.preconditioner_builds += preconditioner_builds_ - builds_before;

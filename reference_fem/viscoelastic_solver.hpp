@@ -103,7 +103,8 @@ class ViscoelasticSolver {
   /// Assemble the tangent (eq. 21 with E_k of eq. 13) and the residual R = F_ext - F_int at the current
   /// solution, with the history of t_n and the step dt. Returns the residual norm (free rows only).
   double assemble_system(double t_new, double dt);
-  void solve();
+  /// Solve K du = R to eta ||R|| (GMRES) and update the solution.
+  void solve(double eta);
   void apply_dirichlet_values(double t_new);
   void update_history(double dt);
   void local_assemble(const typename dealii::DoFHandler<3>::active_cell_iterator& cell, ScratchData& scratch,
