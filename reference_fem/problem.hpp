@@ -72,7 +72,7 @@ struct LinearSolverParameters {
   /// GMRES stops at eta_k ||R_k||, eta_k = max(tolerance, min(0.1, forcing * r_k)), r_k the relative Newton
   /// residual (inexact Newton with a quadratic forcing term, Eisenstat & Walker 1996): far from the solution a
   /// rough solve does as well as an exact one, and near it eta_k r_k ~ r_k^2 keeps Newton quadratic.
-  /// forcing = 0: always `tolerance`.
+  /// forcing = 0, or a linear material (k = 0): always `tolerance`.
   double tolerance = 1e-10;
   double forcing = 0.01;
   int max_iterations = 500;

@@ -420,8 +420,11 @@ StepReport ViscoelasticSolver::do_time_step(double t_new) {
                                std::to_string(iteration) + " iterations)");
     const auto t_solve = std::chrono::steady_clock::now();
     const int builds_before = preconditioner_builds_;
+    // Inexact Newton for the nonlinear law only: with k = 0 the equations are linear, and one solve to the
+    // linear tolerance ends the step.
     const LinearSolverParameters& linear = parameters_.newton.linear;
-    solve(std::max(linear.tolerance, std::min(0.1, linear.forcing * relative)));
+    const double forcing = parameters_.material.k == 0.0 ? 0.0 : linear.forcing;
+    solve(std::max(linear.tolerance, std::min(0.1, forcing * relative)));
     report.solve_seconds += seconds_since(t_solve);
     report.linear_iterations += last_linear_iterations_;
     report.preconditioner_builds += preconditioner_builds_ - builds_before;
