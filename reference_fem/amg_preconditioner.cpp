@@ -61,6 +61,7 @@ Teuchos::ParameterList ml_parameters(const TrilinosWrappers::SparseMatrix& matri
   data.elliptic = true;  // smoothed aggregation with Chebyshev smoothing
   data.higher_order_elements = options.higher_order_elements;
   data.aggregation_threshold = options.aggregation_threshold;
+  data.smoother_type = options.smoother_type;
   data.smoother_sweeps = options.smoother_sweeps;
   data.w_cycle = options.w_cycle;
   Teuchos::ParameterList list;

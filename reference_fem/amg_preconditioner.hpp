@@ -20,7 +20,8 @@ namespace reference_fem {
 struct AmgOptions {
   bool higher_order_elements = true;   ///< P2: aggregate on the matrix graph of all nodes (edge nodes too)
   double aggregation_threshold = 1e-4; ///< drop weak couplings below this when aggregating
-  unsigned int smoother_sweeps = 2;    ///< Chebyshev degree
+  const char* smoother_type = "Chebyshev";
+  unsigned int smoother_sweeps = 2;    ///< Chebyshev degree, or sweeps of the other smoothers
   bool w_cycle = false;
   bool rigid_body_modes = true;        ///< false: the three translations only (what extract_constant_modes gives)
 };

@@ -127,6 +127,7 @@ const char* const kMlTranslations = "ML SA, translations only";
 const char* const kMlThreshold = "ML SA, rigid-body modes, threshold 0.02";
 const char* const kMlChebyshev4 = "ML SA, rigid-body modes, Chebyshev degree 4";
 const char* const kMlWCycle = "ML SA, rigid-body modes, W-cycle";
+const char* const kMlGaussSeidel = "ML SA, rigid-body modes, symmetric Gauss-Seidel (1 sweep)";
 const char* const kMlLowOrder = "ML SA, rigid-body modes, higher_order_elements = false";
 const char* const kGamg = "GAMG, rigid-body modes";
 const char* const kGamgThreshold = "GAMG, rigid-body modes, threshold 0.02";
@@ -138,8 +139,8 @@ const char* const kUmfpack = "UMFPACK LU";
 }  // namespace
 
 std::vector<std::string> preconditioner_candidates() {
-  return {kMlRigid,       kMlTranslations, kMlThreshold, kMlChebyshev4, kMlWCycle, kMlLowOrder,
-          kGamg,          kGamgThreshold,  kBoomerScalar, kBoomerNodal, kUmfpack};
+  return {kMlRigid,  kMlTranslations, kMlThreshold,  kMlChebyshev4, kMlWCycle, kMlGaussSeidel,
+          kMlLowOrder, kGamg,         kGamgThreshold, kBoomerScalar, kBoomerNodal, kUmfpack};
 }
 
 PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const SolverParameters& parameters,
@@ -221,6 +222,12 @@ PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const Sol
     AmgOptions o = options;
     o.w_cycle = true;
     ml(kMlWCycle, o);
+  }
+  {
+    AmgOptions o = options;
+    o.smoother_type = "symmetric Gauss-Seidel";
+    o.smoother_sweeps = 1;
+    ml(kMlGaussSeidel, o);
   }
   {
     AmgOptions o = options;
