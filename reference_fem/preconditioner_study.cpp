@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <ctime>
 #include <functional>
 #include <memory>
 #include <stdexcept>
@@ -36,6 +37,13 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+/// CPU time of this process, all threads [s].
+double cpu_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
 void check(PetscErrorCode code, const char* call) {
@@ -181,21 +189,25 @@ PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const Sol
     PreconditionerTrial trial;
     trial.name = name;
     start = Clock::now();
+    double cpu = cpu_seconds();
     TrilinosWrappers::PreconditionAMG amg;
     amg.initialize(a, ml_parameters(a, *modes, options));
     trial.setup_seconds = seconds_since(start);
+    trial.setup_cpu_seconds = cpu_seconds() - cpu;
     TrilinosWrappers::MPI::Vector x(b);
     x = 0.0;
     SolverControl control(kMaxIterations, tolerance * b_norm, false, false);
     SolverGMRES<TrilinosWrappers::MPI::Vector> gmres(
         control, SolverGMRES<TrilinosWrappers::MPI::Vector>::AdditionalData(kRestart + 2, true));
     start = Clock::now();
+    cpu = cpu_seconds();
     try {
       gmres.solve(a, x, b, amg);
       trial.converged = true;
     } catch (const SolverControl::NoConvergence&) {
     }
     trial.solve_seconds = seconds_since(start);
+    trial.solve_cpu_seconds = cpu_seconds() - cpu;
     trial.iterations = static_cast<int>(control.last_step());
     trial.relative_residual = true_residual(x);
     study.trials.push_back(trial);
@@ -270,12 +282,16 @@ PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const Sol
       check(VecDuplicate(pb, &px), "VecDuplicate");
       check(VecSet(px, 0.0), "VecSet");
       start = Clock::now();
+      double cpu = cpu_seconds();
       check(KSPSetUp(ksp), "KSPSetUp");
       check(PCSetUp(pc), "PCSetUp");
       trial.setup_seconds = seconds_since(start);
+      trial.setup_cpu_seconds = cpu_seconds() - cpu;
       start = Clock::now();
+      cpu = cpu_seconds();
       check(KSPSolve(ksp, pb, px), "KSPSolve");
       trial.solve_seconds = seconds_since(start);
+      trial.solve_cpu_seconds = cpu_seconds() - cpu;
       PetscInt iterations;
       KSPConvergedReason reason;
       check(KSPGetIterationNumber(ksp, &iterations), "KSPGetIterationNumber");
@@ -326,6 +342,7 @@ PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const Sol
     PreconditionerTrial trial;
     trial.name = kUmfpack;
     start = Clock::now();
+    double cpu = cpu_seconds();
     DynamicSparsityPattern dsp(a.m());
     for (types::global_dof_index row = 0; row < a.m(); ++row)
       for (auto entry = a.begin(row); entry != a.end(row); ++entry) dsp.add(row, entry->column());
@@ -336,11 +353,14 @@ PreconditionerStudy compare_preconditioners(const core::TetMesh& mesh, const Sol
     SparseDirectUMFPACK lu;
     lu.initialize(copy);
     trial.setup_seconds = seconds_since(start);
+    trial.setup_cpu_seconds = cpu_seconds() - cpu;
     Vector<double> x(b.size()), rhs(b.size());
     std::copy(b.begin(), b.end(), rhs.begin());
     start = Clock::now();
+    cpu = cpu_seconds();
     lu.vmult(x, rhs);
     trial.solve_seconds = seconds_since(start);
+    trial.solve_cpu_seconds = cpu_seconds() - cpu;
     TrilinosWrappers::MPI::Vector tx(b);
     std::copy(x.begin(), x.end(), tx.begin());
     trial.relative_residual = true_residual(tx);

@@ -16,8 +16,12 @@ namespace reference_fem {
 
 struct PreconditionerTrial {
   std::string name;
-  double setup_seconds = 0.0;  ///< building the preconditioner (aggregation, coarse operators; or LU)
-  double solve_seconds = 0.0;  ///< the GMRES iterations (or the LU triangular solves)
+  double setup_seconds = 0.0;  ///< building the preconditioner (aggregation, coarse operators; or LU), wall
+  double solve_seconds = 0.0;  ///< the GMRES iterations (or the LU triangular solves), wall
+  /// The same in CPU time of this process (all its threads): on a shared machine the wall times swell with
+  /// the load, the CPU times much less.
+  double setup_cpu_seconds = 0.0;
+  double solve_cpu_seconds = 0.0;
   int iterations = 0;          ///< GMRES iterations (0 for the direct solve)
   bool converged = false;
   double relative_residual = 0.0;  ///< ||b - A x|| / ||b|| reached
