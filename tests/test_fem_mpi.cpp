@@ -2,8 +2,9 @@
 // `mpi`): the cracked block of test_fem_crack (a surface-breaking cut, samples on both of its lips and below its
 // front) with the nonlinear lung material (k = 1: non-symmetric tangent), an instantaneous and two creep steps.
 // Each process first solves it alone (MPI_COMM_SELF), then both solve it together on a partitioned mesh
-// (MPI_COMM_WORLD). The samples, the vertex displacements and the probe strain agree to 1e-8 relative at every
-// step, and the distributed run writes one VTU piece per process and a pvtu record.
+// (MPI_COMM_WORLD). The samples, the vertex displacements and the probe strain agree to 1e-12 relative at every
+// step (the requirement is 1e-8; about 4e-16 is reached: round-off of the partitioned sums), and the
+// distributed run writes one VTU piece per process and a pvtu record.
 #include <deal.II/base/mpi.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -51,6 +52,9 @@ core::Geometry cracked_block() {
       },
       MPI_COMM_WORLD);
 }
+
+/// Largest relative difference allowed between the one- and two-process results: about 4e-16 is reached.
+constexpr double kTolerance = 1e-12;
 
 double relative_difference(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).cwiseAbs().maxCoeff() / a.cwiseAbs().maxCoeff();
@@ -113,16 +117,16 @@ TEST(FemMpi, TwoProcessesGiveTheSamplesOfOne) {
                 << all.steps[s].newton_iterations << ", max sample |u| "
                 << one.sample_history[s].rowwise().norm().maxCoeff() * 1e3
                 << " mm, largest sample difference (relative) " << difference << "\n";
-    EXPECT_LT(difference, 1e-8) << "step " << s + 1;
+    EXPECT_LT(difference, kTolerance) << "step " << s + 1;
   }
   // The lips open: the distributed run located the two samples on their own sides of the cut.
   EXPECT_GT((all.sample_displacements.row(1) - all.sample_displacements.row(0)).norm(),
             0.1 * all.sample_displacements.rowwise().norm().maxCoeff());
-  EXPECT_LT(relative_difference(one.vertex_displacements, all.vertex_displacements), 1e-8);
+  EXPECT_LT(relative_difference(one.vertex_displacements, all.vertex_displacements), kTolerance);
   EXPECT_GT(one.probe_strain.volume, 0.0);
   EXPECT_NEAR(all.probe_strain.volume, one.probe_strain.volume, 1e-12 * one.probe_strain.volume);
-  EXPECT_NEAR(all.probe_strain.mean, one.probe_strain.mean, 1e-8 * one.probe_strain.mean);
-  EXPECT_NEAR(all.probe_strain.peak, one.probe_strain.peak, 1e-8 * one.probe_strain.peak);
+  EXPECT_NEAR(all.probe_strain.mean, one.probe_strain.mean, kTolerance * one.probe_strain.mean);
+  EXPECT_NEAR(all.probe_strain.peak, one.probe_strain.peak, kTolerance * one.probe_strain.peak);
 
   // Output: at every step one pvtu record (rank 0) naming one piece per process.
   ASSERT_EQ(all.vtu_files.size(), times.size());
