@@ -8,13 +8,17 @@
 
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
+#include "experiments/compare_command.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/rsr_command.hpp"
 #include "experiments/solve_commands.hpp"
+#include "experiments/sweep_command.hpp"
 #include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
-  // MPI (and PETSc/Trilinos) for the FEM reference; one thread per core of the node, shared among the
-  // processes on it. Only `solve fem` is distributed: other commands would run N copies side by side.
+  // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's AMG-Krylov
+  // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
+  // `solve fem` is distributed: other commands would run N copies side by side.
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
   const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1 &&
@@ -28,6 +32,9 @@ int main(int argc, char** argv) {
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_compare_command(app);
+  experiments::add_sweep_command(app);
+  experiments::add_rsr_command(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {

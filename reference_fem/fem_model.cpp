@@ -32,7 +32,7 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   ViscoelasticSolver solver(triangulation, p, conditions);
   solver.setup_system();
   const SampleEvaluator samples(solver.mapping(), *whole, solver.dof_handler(), sample_points,
-                                options.sample_tolerance);
+                                options.sample_tolerance, options.cut);
   whole.reset();
 
   FemRunResult result;
@@ -90,6 +90,7 @@ CaseProblem problem_from_case(const core::Case& c, const core::TetMesh& mesh) {
 FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const FemRunOptions& options) {
   const CaseProblem problem = problem_from_case(c, geometry.fem_mesh);
   FemRunOptions run = options;
+  if (!run.cut && geometry.cut) run.cut = &*geometry.cut;
   if (!(run.probe_radius > 0.0)) {
     run.probe_centre = geometry.load_centre;
     run.probe_radius = c.load.radius;

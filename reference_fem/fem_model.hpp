@@ -30,6 +30,8 @@ struct FemRunOptions {
   /// Assembly threads per process; 0 keeps deal.II's choice (the node's cores shared among its processes).
   unsigned int threads = 0;
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
+  /// When not null, samples behind the crack front are evaluated on the lip core::RuledSurface::side gives them.
+  const core::RuledSurface* cut = nullptr;
   /// When radius > 0, measure the strain within this ball at the last step (FemRunResult::probe_strain).
   Eigen::Vector3d probe_centre = Eigen::Vector3d::Zero();  ///< [m]
   double probe_radius = 0.0;                               ///< [m]

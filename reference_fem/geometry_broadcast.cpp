@@ -83,6 +83,27 @@ core::Geometry build_on_rank_zero(const std::function<core::Geometry()>& build, 
   g.load_centre = Eigen::Vector3d(small[0], small[1], small[2]);
   g.load_normal = Eigen::Vector3d(small[3], small[4], small[5]);
   g.reference_volume = small[6];
+  // The cut: every process locates the samples next to it on their lip (SampleEvaluator), so each needs it.
+  // Sent as what defines it (trace, direction, depth, extension) and rebuilt, which gives the same surface.
+  int has_cut = g.cut ? 1 : 0;
+  MPI_Bcast(&has_cut, 1, MPI_INT, 0, communicator);
+  if (has_cut) {
+    Eigen::Matrix<double, 3, Eigen::Dynamic> top;
+    std::array<double, 5> shape{};
+    if (root) {
+      top.resize(3, static_cast<Eigen::Index>(g.cut->top().size()));
+      for (std::size_t i = 0; i < g.cut->top().size(); ++i) top.col(static_cast<Eigen::Index>(i)) = g.cut->top()[i];
+      shape = {g.cut->direction().x(), g.cut->direction().y(), g.cut->direction().z(), g.cut->depth(),
+               g.cut->extension()};
+    }
+    broadcast_matrix(&top, communicator);
+    MPI_Bcast(shape.data(), 5, MPI_DOUBLE, 0, communicator);
+    if (!root) {
+      std::vector<Eigen::Vector3d> points(static_cast<std::size_t>(top.cols()));
+      for (std::size_t i = 0; i < points.size(); ++i) points[i] = top.col(static_cast<Eigen::Index>(i));
+      g.cut.emplace(std::move(points), Eigen::Vector3d(shape[0], shape[1], shape[2]), shape[3], shape[4]);
+    }
+  }
   return g;
 }
 

@@ -14,8 +14,8 @@
 namespace reference_fem {
 
 /// Run `build` on rank 0 only and give every process of `communicator` the parts the FEM reads:
-/// fem_mesh, sample_points, load_centre, load_normal and reference_volume (the reference surface, the
-/// meshless mesh and the cut stay on rank 0). When `build` throws on rank 0, every process throws the same
+/// fem_mesh, sample_points, load_centre, load_normal, reference_volume and the cut (the reference surface
+/// and the meshless mesh stay on rank 0). When `build` throws on rank 0, every process throws the same
 /// error (a core::CaseError stays a CaseError with its file and JSON path), so all of them stop together.
 /// Collective.
 core::Geometry build_on_rank_zero(const std::function<core::Geometry()>& build, MPI_Comm communicator);

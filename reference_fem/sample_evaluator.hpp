@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/ruled_surface.hpp"
 #include "core/tet_mesh.hpp"
 
 namespace reference_fem {
@@ -25,8 +26,11 @@ class SampleEvaluator {
   /// distributed triangulation was built from, or the dof_handler's own triangulation when it is serial).
   /// @param points  #points by 3 [m]
   /// @param tolerance  largest distance [m] a point may lie outside the mesh; farther throws
+  /// @param cut  when not null, a point behind the crack front is located on the lip core::RuledSurface::side
+  ///             gives it (the rule the meshless model uses too): in a cell with no vertex on the other side
   SampleEvaluator(const dealii::Mapping<3>& mapping, const dealii::Triangulation<3>& whole_mesh,
-                  const dealii::DoFHandler<3>& dof_handler, const Eigen::MatrixXd& points, double tolerance);
+                  const dealii::DoFHandler<3>& dof_handler, const Eigen::MatrixXd& points, double tolerance,
+                  const core::RuledSurface* cut = nullptr);
 
   /// #points by 3 displacement [m] of the FE field `solution` (with ghost entries), on every process.
   /// Collective over the solution's communicator.
