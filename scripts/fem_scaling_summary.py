@@ -2,6 +2,7 @@
 """Summarise the FEM scaling benchmark (bench_fem, BM_FemBlock) and estimate the largest mesh per node.
 
   scripts/fem_scaling_summary.py results/bench/bench_fem_scaling.json [more.json ...] [--node-memory-gb 64 128 256]
+                                 [--processes-per-node 64]
 
 Reads Google Benchmark JSON reports of build/bin/bench_fem and prints, from the numbers in them only:
   * per block size: DOFs, Newton iterations, seconds per Newton iteration, peak memory and bytes per DOF, for
@@ -9,7 +10,7 @@ Reads Google Benchmark JSON reports of build/bin/bench_fem and prints, from the 
   * the growth exponent of the time per Newton iteration against the DOFs (least squares on log-log, AMG on one
     process), overall and between neighbouring sizes;
   * memory = fixed + per_dof * DOFs (least squares over the one-process AMG runs), and from it the largest
-    number of DOFs a node of the given memory holds, keeping 10 % for the system.
+    number of DOFs a node of the given memory holds with the given MPI processes, keeping 10 % for the system.
 The BM_LungSmall pair (AMG against the direct solver, same run) is summarised too when present.
 """
 import argparse
@@ -57,6 +58,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("reports", nargs="+")
     parser.add_argument("--node-memory-gb", type=float, nargs="+", default=[64.0, 128.0, 256.0])
+    parser.add_argument("--processes-per-node", type=int, default=1,
+                        help="MPI processes per node, each with the fixed memory of one process")
     args = parser.parse_args()
     runs = load(args.reports)
 
@@ -108,10 +111,11 @@ def main():
         fixed_mb, per_dof_mb = fit_line([b["dofs"] for b in sizes], [b["peak_memory_MB"] for b in sizes])
         per_dof_bytes = per_dof_mb * 1024.0 * 1024.0
         print(f"\npeak memory ~ {fixed_mb:.0f} MB + {per_dof_bytes:.0f} bytes/DOF (least squares, one process)")
+        p = args.processes_per_node
         for gb in args.node_memory_gb:
             usable_mb = 0.9 * gb * 1024.0
-            print(f"  a {gb:.0f} GB node holds about {(usable_mb - fixed_mb) / per_dof_mb / 1e6:.1f} M DOFs "
-                  f"(90 % of its memory; one process; each further MPI process adds about {fixed_mb:.0f} MB)")
+            print(f"  a {gb:.0f} GB node with {p} MPI process{'es' if p > 1 else ''} holds about "
+                  f"{(usable_mb - p * fixed_mb) / per_dof_mb / 1e6:.1f} M DOFs (90 % of its memory)")
 
 
 if __name__ == "__main__":
