@@ -136,6 +136,7 @@ FemSpec read_fem(const std::optional<JsonReader>& r) {
   f.degree = r->integer("degree", 1, 2, 2);
   f.newton_tolerance = r->in_range("newton_tolerance", 0.0, 1e-2, false, true, 1e-8);
   f.max_newton_iterations = r->integer("max_newton_iterations", 1, 200, 25);
+  f.linear_solver = r->choice("linear_solver", {"amg", "direct"}, f.linear_solver);
   r->finish();
   return f;
 }

@@ -89,6 +89,9 @@ struct FemSpec {
   int degree = 2;                   ///< FE_SimplexP degree
   double newton_tolerance = 1e-8;   ///< relative residual
   int max_newton_iterations = 25;
+  /// The Newton systems' preconditioner: "amg" (algebraic multigrid, any size and MPI process count) or
+  /// "direct" (LU factors, small meshes on one process); docs/FEM_REFERENCE.md.
+  std::string linear_solver = "amg";
 };
 
 struct OutputSpec {

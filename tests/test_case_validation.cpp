@@ -211,6 +211,11 @@ TEST_F(BadCase, UnknownGeometrySource) {
   expect_error(write_case(base_), {"/geometry/source", "builtin_lung", "liver"});
 }
 
+TEST_F(BadCase, UnknownFemLinearSolver) {
+  base_["fem"]["linear_solver"] = "cholesky";
+  expect_error(write_case(base_), {"/fem/linear_solver", "amg", "direct", "cholesky"});
+}
+
 TEST_F(BadCase, VectorWithTwoComponents) {
   base_["load"]["force"] = {0.3, 0.0};
   expect_error(write_case(base_), {"/load/force", "array of 3 numbers"});
