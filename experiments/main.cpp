@@ -6,6 +6,8 @@
 
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
+#include "experiments/fit_commands.hpp"
+#include "experiments/probe_commands.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/solve_commands.hpp"
 #include "experiments/verify_commands.hpp"
@@ -17,6 +19,8 @@ int main(int argc, char** argv) {
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_fit_commands(app);
+  experiments::add_probe_commands(app);
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {

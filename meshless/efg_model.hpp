@@ -84,6 +84,13 @@ class EfgModel {
   void solve();
   /// Advance one step (1-based index into problem().step_times): Newton to convergence, then commit history.
   StepRecord solve_step(int step);
+  /// Start again from the undeformed body (U = 0, fresh Kelvin history, no step records) under a new traction,
+  /// keeping what setup_system() built (MLS tables, sparsity, penalty terms, solver choice) and the last
+  /// factorised tangent, which solve_step() reuses while it still contracts the residual. Runs many loads on one
+  /// node cloud (the surrogate's training, meshless/surrogate_training.hpp) at the cost of the time steps alone.
+  /// @param loaded_faces #boundary faces mask of the loaded faces (empty: the faces tagged load)
+  /// @param traction t-bar [Pa] at full load on those faces (eq. 24), scaled by problem().load_scale
+  void restart(std::vector<char> loaded_faces, VectorField traction);
 
   // --- results ---------------------------------------------------------------------------------------------
   /// u(X) = sum_i phi_i(X) U_i (eq. 7) at arbitrary material points, #points by 3 [m].

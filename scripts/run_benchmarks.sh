@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Run the Google Benchmark programs and keep their JSON reports in results/bench/ (docs/PERFORMANCE.md).
-#   scripts/run_benchmarks.sh            all three: bench_mls, bench_efg, bench_fem (about 20 min on 2 cores)
+#   scripts/run_benchmarks.sh            all four: bench_mls, bench_efg, bench_fem, bench_surrogate (about 25 min on 2 cores)
 #   scripts/run_benchmarks.sh bench_fem  only the named ones
 # Each report is written to a temporary file and moved into place only when its benchmark finished, so an
 # interrupted run never leaves a half-written report. Speed is compared as ratios within one run.
@@ -11,7 +11,7 @@ if [[ "${1:-}" == "-h" || "${1:-}" == "--help" ]]; then
   exit 0
 fi
 benches=("$@")
-[[ ${#benches[@]} -eq 0 ]] && benches=(bench_mls bench_efg bench_fem)
+[[ ${#benches[@]} -eq 0 ]] && benches=(bench_mls bench_efg bench_fem bench_surrogate)
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DTISSUE_BUILD_BENCHMARKS=ON >/dev/null
 cmake --build build -j"$(nproc 2>/dev/null || echo 2)" --target "${benches[@]}"
 mkdir -p results/bench

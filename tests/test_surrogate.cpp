@@ -1,0 +1,334 @@
+// The force -> displacement surrogate (paper §3, eqs. 25-28): the fits recover known polynomials, Ceres agrees with
+// the closed-form least squares, the query superposes the axes and flags what it was not trained on, the file
+// refuses what it cannot trust, and on a small box the surrogate matches the full meshless model at forces it was
+// not trained on (RMSE over the surface <= 2 % of the contact-node displacement).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <random>
+
+#include "meshless/box_mesh.hpp"
+#include "meshless/efg_model.hpp"
+#include "meshless/surrogate.hpp"
+#include "meshless/surrogate_builder.hpp"
+#include "meshless/surrogate_cost_functions.hpp"
+#include "meshless/surrogate_file.hpp"
+
+namespace meshless {
+namespace {
+
+constexpr double kMm = 1e-3;
+
+/// A 40 x 40 x 20 mm block of lung-like tissue (the shipped cases' material, k = 1) clamped on its base, 5 mm
+/// nodes; the contact is the centre of the top face. Two steps: the force ramps over 1 s.
+EfgProblem box_problem() {
+  EfgProblem p;
+  p.name = "surrogate box";
+  p.mesh = make_box_mesh({0, 0, 0}, {40 * kMm, 40 * kMm, 20 * kMm}, 8, 8, 4,
+                         [](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
+                           return c.z() < 1e-9 ? core::FaceTag::fixed : core::FaceTag::free_surface;
+                         });
+  p.material = {6000.0, 12000.0, 18000.0, 0.4, 1.0};
+  p.support.d_max = 2.0;
+  p.support.k = 6;
+  p.quadrature_order = 2;
+  p.node_spacing = 5 * kMm;
+  p.penalty_factor = 1e3;
+  p.load_scale = [](double t) { return std::min(t / 1.0, 1.0); };
+  p.step_times = {0.5, 1.0};
+  return p;
+}
+
+core::SurrogateSpec box_spec() {
+  core::SurrogateSpec s;
+  s.contact_points = {{20 * kMm, 20 * kMm, 20 * kMm}};
+  s.patch_radius = 6 * kMm;
+  s.max_force = 0.05;  // 0.44 kPa on the patch: a few % strain, well inside the k = 1 law's range
+  s.force_levels = 4;
+  s.holdout_forces = 2;
+  return s;
+}
+
+TEST(SurrogateBasis, SubsetsMatchTheSmallerBasisAndTheFrameIsOrthonormal) {
+  const SpatialBasis full(6, 3);
+  EXPECT_EQ(full.size(), 28 * 4);
+  for (int a = 0; a <= 6; ++a)
+    for (int b = 0; b <= 3; ++b) {
+      const SpatialBasis small(a, b);
+      const std::vector<int> cols = full.subset(a, b);
+      ASSERT_EQ(static_cast<int>(cols.size()), small.size());
+      for (int k = 0; k < small.size(); ++k) EXPECT_EQ(full.exponents()[cols[k]], small.exponents()[k]);
+    }
+  const SurfaceFrame f = SurfaceFrame::at({1, 2, 3}, {0.3, -0.2, 0.9}, 2.0);
+  EXPECT_NEAR(f.tangent1.dot(f.tangent2), 0.0, 1e-15);
+  EXPECT_NEAR(f.tangent1.dot(f.normal), 0.0, 1e-15);
+  EXPECT_NEAR(f.tangent1.cross(f.tangent2).dot(f.normal), 1.0, 1e-15);  // right-handed
+  const Eigen::Vector3d x = f.origin + 2.0 * (0.1 * f.tangent1 - 0.4 * f.tangent2 + 0.25 * f.normal);
+  EXPECT_TRUE(f.local(x).isApprox(Eigen::Vector3d(0.1, -0.4, 0.25), 1e-14));
+}
+
+TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationPicksItsOrder) {
+  // u = 0.8 s - 0.3 s^2 + 0.05 s^3 on 8 levels: lambda = 3 reproduces it exactly; 1 and 2 cannot.
+  ContactTrainingData data;
+  SurfaceNodes surface;
+  surface.vertex = {0};
+  surface.position = core::PointMatrix::Zero(1, 3);
+  surface.normal = core::PointMatrix(1, 3);
+  surface.normal << 0, 0, 1;
+  data.contact = 0;
+  data.levels = {-4, -3, -2, -1, 1, 2, 3, 4};
+  auto u = [](double f) { const double s = f / 4.0; return 1e-3 * (0.8 * s - 0.3 * s * s + 0.05 * s * s * s); };
+  for (int j = 0; j < 3; ++j)
+    for (double f : data.levels) {
+      core::PointMatrix d = core::PointMatrix::Zero(1, 3);
+      d(0, j) = u(f);
+      data.displacement[j].push_back(d);
+    }
+  SurrogateFitOptions options;
+  options.max_tangential_order = 0;
+  options.max_normal_order = 0;
+  options.cv_folds = 4;
+  // One surface node cannot be cross-validated spatially: fit the contact node alone through the public path by
+  // giving it enough copies of itself.
+  surface.vertex.assign(12, 0);
+  surface.position = core::PointMatrix::Zero(12, 3);
+  surface.normal = core::PointMatrix::Zero(12, 3);
+  surface.normal.col(2).setOnes();
+  for (int j = 0; j < 3; ++j)
+    for (core::PointMatrix& d : data.displacement[j]) d = d.row(0).replicate(12, 1).eval();
+  const ContactFit fit = fit_contact(surface, data, 4.0, options);
+  for (int j = 0; j < 3; ++j) {
+    const AxisFit& a = fit.axis[j];
+    EXPECT_EQ(a.force_order, 3) << "axis " << j;
+    ASSERT_EQ(a.contact.cols(), 3);
+    // r_p in SI: 1e-3 * coefficient / 4^p
+    EXPECT_NEAR(a.contact(j, 0), 1e-3 * 0.8 / 4, 1e-12);
+    EXPECT_NEAR(a.contact(j, 1), -1e-3 * 0.3 / 16, 1e-12);
+    EXPECT_NEAR(a.contact(j, 2), 1e-3 * 0.05 / 64, 1e-12);
+    EXPECT_GT(a.force_order_cv[1].rms, 1e3 * a.force_order_cv[2].rms);  // lambda 2 misses the cubic term
+    EXPECT_LT(a.contact_cv_rms, 1e-12);
+  }
+  for (const FitSummary& s : fit.summaries) {
+    EXPECT_TRUE(s.usable) << s.what;
+    EXPECT_NE(s.termination, "FAILURE") << s.what;
+  }
+}
+
+TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheClosedFormLeastSquares) {
+  // A noisy field over random 3-D points: Ceres' minimiser of sum (psi . c - t)^2 is the QR solution.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  const SpatialBasis basis(4, 2);
+  const int n = 300;
+  Eigen::MatrixX3d local(n, 3);
+  for (int i = 0; i < n; ++i) local.row(i) << uniform(rng), uniform(rng), uniform(rng);
+  const Eigen::MatrixXd psi = basis.evaluate(local);
+  Eigen::VectorXd target(n);
+  for (int i = 0; i < n; ++i) target[i] = std::sin(2 * local(i, 0)) * std::exp(local(i, 1)) + 0.1 * uniform(rng);
+  ceres::Problem problem;
+  std::vector<double> c(basis.size(), 0.0);
+  for (int i = 0; i < n; ++i) {
+    std::vector<double> row(psi.row(i).data(), psi.row(i).data() + 0);
+    row.resize(basis.size());
+    for (int k = 0; k < basis.size(); ++k) row[k] = psi(i, k);
+    problem.AddResidualBlock(InducedFieldResidual::Create(row, target[i]), nullptr, c.data());
+  }
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.function_tolerance = 1e-14;
+  options.gradient_tolerance = 1e-16;
+  options.parameter_tolerance = 1e-12;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
+  const Eigen::VectorXd exact = psi.colPivHouseholderQr().solve(target);
+  const Eigen::VectorXd lm = Eigen::Map<Eigen::VectorXd>(c.data(), basis.size());
+  EXPECT_LT((lm - exact).norm() / exact.norm(), 1e-8) << summary.BriefReport();
+}
+
+TEST(SurrogateLoadPatch, SelectsTheFacesAroundTheContactOnItsSide) {
+  const core::TetMesh mesh = make_box_mesh({0, 0, 0}, {40 * kMm, 40 * kMm, 20 * kMm}, 8, 8, 4);
+  const SurfaceNodes surface = surface_nodes(mesh);
+  EXPECT_EQ(surface.size(), 9 * 9 * 5 - 7 * 7 * 3);  // all nodes minus the interior ones
+  const int c = surface.nearest({20 * kMm, 20 * kMm, 20 * kMm});
+  EXPECT_TRUE(surface.normal.row(c).isApprox(Eigen::RowVector3d(0, 0, 1), 1e-12));
+  const LoadPatch p = load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 6 * kMm);
+  // On the 5 mm grid, split into two triangles per square, the faces whose centroid is within 6 mm of the centre:
+  // the 4 squares around it give 8 faces (centroids at 2.36 and 3.33 mm); the 8 squares beyond give 8 more
+  // (centroids at 5.27 mm) and the rest are farther than 6 mm.
+  EXPECT_EQ(p.num_faces, 16);
+  EXPECT_NEAR(p.area, 16 * 12.5 * kMm * kMm, 1e-12);
+  // The far side (the base) is never loaded, whatever the radius.
+  const LoadPatch wide = load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 1.0);
+  EXPECT_NEAR(wide.area, 40 * 40 * kMm * kMm, 1e-12);
+}
+
+TEST(SurrogateTraining, RestartingTheModelEqualsAFreshModel) {
+  // EfgModel::restart keeps the set-up and the factorisation; the answer must not depend on what ran before.
+  const EfgProblem problem = box_problem();
+  const SurfaceNodes surface = surface_nodes(problem.mesh);
+  PatchSolveOptions options;
+  options.patch_radius = 6 * kMm;
+  options.response_step = 2;
+  options.max_workers = 1;
+  const int c = surface.nearest({20 * kMm, 20 * kMm, 20 * kMm});
+  const PatchLoad a{c, {0.0, 0.0, -0.05}}, b{c, {0.03, 0.0, 0.0}};
+  const std::vector<SolvedLoad> both = solve_patch_loads(problem, {}, surface, {a, b}, options);
+  const std::vector<SolvedLoad> fresh = solve_patch_loads(problem, {}, surface, {b}, options);
+  const double scale = fresh[0].displacement.cwiseAbs().maxCoeff();
+  EXPECT_GT(scale, 1e-5);
+  EXPECT_LT((both[1].displacement - fresh[0].displacement).cwiseAbs().maxCoeff(), 1e-7 * scale);
+}
+
+/// The box surrogate, trained once for the tests below (about ten seconds).
+const SurrogateData& box_surrogate(SurrogateBuildReport* report_out = nullptr) {
+  static SurrogateBuildReport report;
+  static const SurrogateData data = [] {
+    SurrogateBuildOptions options;
+    SurrogateData d = build_surrogate(box_problem(), box_spec(), options,
+                                      [](const std::string& line) { std::cout << "  " << line << "\n"; }, &report);
+    d.case_name = "surrogate box";
+    d.case_hash = "0123456789abcdef";
+    return d;
+  }();
+  if (report_out) *report_out = report;
+  return data;
+}
+
+TEST(SurrogateBox, HeldOutForcesMatchTheFullModelWithinTwoPercent) {
+  SurrogateBuildReport report;
+  const SurrogateData& d = box_surrogate(&report);
+  ASSERT_EQ(d.contacts.size(), 1u);
+  const ContactFit& fit = d.contacts[0];
+  for (int j = 0; j < 3; ++j) {
+    const AxisFit& a = fit.axis[j];
+    std::cout << "axis " << "xyz"[j] << ": lambda " << a.force_order << " (CV " << a.contact_cv_rms * 1e3
+              << " mm), training RMS " << a.training_rms * 1e3 << " mm";
+    for (int i = 0; i < 3; ++i)
+      std::cout << ", (a, b)_" << "xyz"[i] << " = (" << a.field[i].tangential_order << ", "
+                << a.field[i].normal_order << ") CV " << a.field[i].cv_rms * 1e3 << " mm";
+    std::cout << "\n";
+  }
+  for (const FitSummary& s : fit.summaries) EXPECT_TRUE(s.usable) << s.what << ": " << s.termination;
+  ASSERT_EQ(report.holdouts.size(), 2u);
+  for (const HoldoutError& e : report.holdouts) {
+    std::cout << "held-out force (" << e.load.force.transpose() << ") N: RMSE " << e.rmse * 1e3 << " mm = "
+              << 100 * e.relative << " % of the contact-node displacement " << e.contact_displacement * 1e3
+              << " mm; contact-node error " << e.contact_error * 1e3 << " mm\n";
+    EXPECT_LE(e.relative, 0.02);
+  }
+}
+
+TEST(SurrogateBox, QuerySuperposesTheAxesAndFlagsWhatWasNotTrained) {
+  const Surrogate s(box_surrogate());
+  const int contact = s.data().contacts[0].contact;
+  const Eigen::Vector3d x = s.data().surface_position.row(contact).transpose();
+  core::PointMatrix u, ux, uy, uz;
+  const Eigen::Vector3d f(0.01, -0.02, -0.03);
+  const SurrogateResponse r = s.query(x, f, &u);
+  EXPECT_TRUE(r.force_in_range);
+  EXPECT_TRUE(r.on_trained_contact);
+  EXPECT_EQ(r.contact_node, contact);
+  const SurrogateResponse rx = s.query(x, {f.x(), 0, 0}, &ux), ry = s.query(x, {0, f.y(), 0}, &uy),
+                          rz = s.query(x, {0, 0, f.z()}, &uz);
+  EXPECT_LT((u - ux - uy - uz).cwiseAbs().maxCoeff(), 1e-15);  // the paper's superposition of the components
+  EXPECT_TRUE(r.contact_displacement.isApprox(rx.contact_displacement + ry.contact_displacement +
+                                                  rz.contact_displacement, 1e-14));
+  EXPECT_NEAR(r.max_surface_displacement, u.rowwise().norm().maxCoeff(), 1e-18);
+  EXPECT_LT(r.contact_displacement.z(), 0.0);  // pressed in
+
+  // Outside the trained range: clamped to it and flagged, never extrapolated.
+  core::PointMatrix clamped, edge;
+  const SurrogateResponse out = s.query(x, {0, 0, -0.2}, &clamped);
+  const SurrogateResponse at_edge = s.query(x, {0, 0, -0.05}, &edge);
+  EXPECT_FALSE(out.force_in_range);
+  EXPECT_TRUE(at_edge.force_in_range);
+  EXPECT_DOUBLE_EQ(out.force.z(), -0.05);
+  EXPECT_LT((clamped - edge).cwiseAbs().maxCoeff(), 1e-18);
+  // Away from every trained contact: the nearest is used and the query is flagged.
+  const SurrogateResponse far = s.query(x + Eigen::Vector3d(10 * kMm, 0, 0), f, &u);
+  EXPECT_FALSE(far.on_trained_contact);
+  EXPECT_NEAR(far.contact_distance, 10 * kMm, 1e-12);
+  EXPECT_EQ(far.contact_node, contact);
+}
+
+class SurrogateFile : public ::testing::Test {
+ protected:
+  std::string path(const std::string& name) {
+    const auto dir = std::filesystem::temp_directory_path() / "tissue_test_surrogate";
+    std::filesystem::create_directories(dir);
+    return (dir / name).string();
+  }
+  static std::string read(const std::string& p) {
+    std::ifstream in(p, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  }
+  static void write(const std::string& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+  static std::string error_of(const std::string& p, const std::optional<std::string>& hash = std::nullopt) {
+    try {
+      read_surrogate(p, hash);
+    } catch (const SurrogateFileError& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+};
+
+TEST_F(SurrogateFile, RoundTripGivesTheSameAnswers) {
+  const std::string p = path("box.surrogate.json");
+  write_surrogate(p, box_surrogate());
+  const SurrogateData back = read_surrogate(p, std::string("0123456789abcdef"));
+  const Surrogate a(box_surrogate()), b(back);
+  const Eigen::Vector3d x = a.data().surface_position.row(a.data().contacts[0].contact).transpose();
+  core::PointMatrix ua, ub;
+  const SurrogateResponse ra = a.query(x, {0.01, 0.02, -0.04}, &ua), rb = b.query(x, {0.01, 0.02, -0.04}, &ub);
+  EXPECT_EQ(ua, ub);  // the JSON numbers round-trip exactly
+  EXPECT_EQ(ra.contact_displacement, rb.contact_displacement);
+  for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(p).parent_path()))
+    EXPECT_EQ(entry.path().filename().string().rfind(".box", 0), std::string::npos)
+        << "temporary file left behind: " << entry.path();
+}
+
+TEST_F(SurrogateFile, MissingTruncatedEditedOrMismatchedFilesAreRefusedWithTheReason) {
+  const std::string good = path("good.surrogate.json");
+  write_surrogate(good, box_surrogate());
+  const std::string text = read(good);
+
+  EXPECT_NE(error_of(path("does_not_exist.json")).find("cannot open the surrogate file"), std::string::npos);
+
+  const std::string truncated = path("truncated.json");
+  write(truncated, text.substr(0, text.size() / 2));
+  EXPECT_NE(error_of(truncated).find("truncated"), std::string::npos) << error_of(truncated);
+
+  const std::string edited = path("edited.json");
+  std::string e = text;
+  const std::size_t at = e.find("\"max_force\":");
+  ASSERT_NE(at, std::string::npos);
+  e.replace(at, 12, "\"max_force\":9");  // a digit more: a larger claimed range
+  write(edited, e);
+  EXPECT_NE(error_of(edited).find("checksum"), std::string::npos) << error_of(edited);
+
+  EXPECT_NE(error_of(good, std::string("ffff")).find("the case changed"), std::string::npos);
+
+  nlohmann::json j = nlohmann::json::parse(text);
+  j["format_version"] = kSurrogateFormatVersion + 1;
+  const std::string newer = path("newer.json");
+  write(newer, j.dump());
+  EXPECT_NE(error_of(newer).find("format version"), std::string::npos) << error_of(newer);
+
+  j = nlohmann::json::parse(text);
+  j["units"]["length"] = "mm";
+  const std::string mm = path("mm.json");
+  write(mm, j.dump());
+  EXPECT_NE(error_of(mm).find("units"), std::string::npos) << error_of(mm);
+
+  EXPECT_NO_THROW(read_surrogate(good, std::string("0123456789abcdef")));
+}
+
+}  // namespace
+}  // namespace meshless
