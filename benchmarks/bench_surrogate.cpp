@@ -48,6 +48,7 @@ core::SurrogateSpec box_spec() {
   core::SurrogateSpec s;
   s.contact_points = {{20 * kMm, 20 * kMm, 20 * kMm}};
   s.patch_radius = 6 * kMm;
+  s.contact_length = 12 * kMm;  // the case reader's default, 2 * patch_radius
   s.max_force = 0.05;
   s.force_levels = 4;
   s.holdout_forces = 0;

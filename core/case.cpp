@@ -142,6 +142,7 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
   SurrogateSpec s;
   s.contact_points = {load.point};
   s.patch_radius = load.radius;
+  s.contact_length = 2.0 * s.patch_radius;
   if (!r) return s;
   if (r->has("contact_points")) {
     s.contact_points = r->vector3_list("contact_points", 1);
@@ -160,6 +161,8 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
                                            2 * s.force_levels - 1, s.max_force_order));
   s.max_tangential_order = r->integer("max_tangential_order", 0, 12, s.max_tangential_order);
   s.max_normal_order = r->integer("max_normal_order", 0, 8, s.max_normal_order);
+  s.max_contact_order = r->integer("max_contact_order", 0, 6, s.max_contact_order);
+  s.contact_length = r->positive("contact_length", 2.0 * s.patch_radius / kMm) * kMm;
   s.cv_folds = r->integer("cv_folds", 2, 20, s.cv_folds);
   s.holdout_forces = r->integer("holdout_forces", 0, 100, s.holdout_forces);
   r->finish();

@@ -96,7 +96,9 @@ struct SurrogateSpec {
   ResponseTime response_time = ResponseTime::end_of_ramp;
   int max_force_order = 4;       ///< largest lambda tried (eqs. 25-27)
   int max_tangential_order = 6;  ///< largest a tried (eq. 28, surface-local tangential coordinates)
-  int max_normal_order = 3;      ///< largest b tried (eq. 28, the normal coordinate)
+  int max_normal_order = 2;      ///< largest b tried (eq. 28, the normal coordinate)
+  int max_contact_order = 2;     ///< largest c tried (eq. 28, the contact terms)
+  double contact_length = 0.0;   ///< [m] l of the contact terms; absent -> 2 * patch_radius
   int cv_folds = 5;              ///< k of the k-fold cross-validation that picks lambda, a and b
   int holdout_forces = 2;        ///< full solves at untrained forces, to report the surrogate's error
 };

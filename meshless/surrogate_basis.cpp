@@ -7,10 +7,17 @@
 #include <stdexcept>
 
 namespace meshless {
+namespace {
 
-SurfaceFrame SurfaceFrame::at(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal, double length) {
-  if (!(length > 0.0) || !(normal.norm() > 0.0))
-    throw std::invalid_argument("SurfaceFrame: expected a non-zero normal and a positive length");
+constexpr int kMaxPower = 16;   // powers tabulated per coordinate
+constexpr int kContactDegree = 2;  // degree of the direction monomials of the contact terms (Kelvin: e_i e_j)
+
+}  // namespace
+
+SurfaceFrame SurfaceFrame::at(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal, double length,
+                              double contact_length) {
+  if (!(length > 0.0) || !(normal.norm() > 0.0) || !(contact_length > 0.0))
+    throw std::invalid_argument("SurfaceFrame: expected a non-zero normal and positive lengths");
   SurfaceFrame f;
   f.origin = origin;
   f.normal = normal.normalized();
@@ -20,6 +27,7 @@ SurfaceFrame SurfaceFrame::at(const Eigen::Vector3d& origin, const Eigen::Vector
   f.tangent1 = (e - e.dot(f.normal) * f.normal).normalized();
   f.tangent2 = f.normal.cross(f.tangent1);
   f.length = length;
+  f.contact_length = contact_length;
   return f;
 }
 
@@ -28,25 +36,34 @@ Eigen::Vector3d SurfaceFrame::local(const Eigen::Vector3d& x) const {
   return {d.dot(tangent1), d.dot(tangent2), d.dot(normal)};
 }
 
-SpatialBasis::SpatialBasis(int tangential_order, int normal_order) : a_(tangential_order), b_(normal_order) {
-  if (a_ < 0 || b_ < 0) throw std::invalid_argument("SpatialBasis: orders must be >= 0");
+SpatialBasis::SpatialBasis(int tangential_order, int normal_order, int contact_order, double contact_length)
+    : a_(tangential_order), b_(normal_order), c_(contact_order), ell_(contact_length) {
+  if (a_ < 0 || b_ < 0 || c_ < 0) throw std::invalid_argument("SpatialBasis: orders must be >= 0");
+  if (std::max({a_, b_, c_}) >= kMaxPower) throw std::invalid_argument("SpatialBasis: orders must be < 16");
+  if (c_ > 0 && !(ell_ > 0.0)) throw std::invalid_argument("SpatialBasis: contact terms need a contact length > 0");
   for (int degree = 0; degree <= a_; ++degree)
     for (int q = 0; q <= degree; ++q)
-      for (int r = 0; r <= b_; ++r) exponents_.push_back({degree - q, q, r});
+      for (int r = 0; r <= b_; ++r) terms_.push_back({degree - q, q, r, 0});
+  for (int m = 1; m <= c_; ++m)
+    for (int degree = 0; degree <= kContactDegree; ++degree)
+      for (int q = 0; q <= degree; ++q)
+        for (int r = 0; r <= degree - q; ++r) terms_.push_back({degree - q - r, q, r, m});
 }
 
 void SpatialBasis::evaluate(const Eigen::Vector3d& local, double* out) const {
   // Powers once per coordinate, then products: a few dozen multiplications per point.
-  const int n = std::max(a_, b_) + 1;
-  double pw[3][16];
-  if (n > 16) throw std::invalid_argument("SpatialBasis: orders above 15 are not supported");
-  for (int c = 0; c < 3; ++c) {
-    pw[c][0] = 1.0;
-    for (int k = 1; k < n; ++k) pw[c][k] = pw[c][k - 1] * local[c];
+  double pw[3][kMaxPower], ew[3][kContactDegree + 1], sw[kMaxPower];
+  const double rho = std::sqrt(local.squaredNorm() + ell_ * ell_);
+  for (int k = 0; k < 3; ++k) {
+    pw[k][0] = ew[k][0] = 1.0;
+    for (int n = 1; n < kMaxPower; ++n) pw[k][n] = pw[k][n - 1] * local[k];
+    for (int n = 1; n <= kContactDegree; ++n) ew[k][n] = ew[k][n - 1] * (c_ > 0 ? local[k] / rho : 0.0);
   }
+  sw[0] = 1.0;
+  for (int n = 1; n <= c_; ++n) sw[n] = sw[n - 1] * ell_ / rho;
   for (int k = 0; k < size(); ++k) {
-    const std::array<int, 3>& e = exponents_[k];
-    out[k] = pw[0][e[0]] * pw[1][e[1]] * pw[2][e[2]];
+    const BasisTerm& t = terms_[k];
+    out[k] = t.m == 0 ? pw[0][t.p] * pw[1][t.q] * pw[2][t.r] : sw[t.m] * ew[0][t.p] * ew[1][t.q] * ew[2][t.r];
   }
 }
 
@@ -56,11 +73,12 @@ Eigen::MatrixXd SpatialBasis::evaluate(const Eigen::MatrixX3d& local) const {
   return m;
 }
 
-std::vector<int> SpatialBasis::subset(int tangential_order, int normal_order) const {
+std::vector<int> SpatialBasis::subset(int tangential_order, int normal_order, int contact_order) const {
   std::vector<int> columns;
   for (int k = 0; k < size(); ++k) {
-    const std::array<int, 3>& e = exponents_[k];
-    if (e[0] + e[1] <= tangential_order && e[2] <= normal_order) columns.push_back(k);
+    const BasisTerm& t = terms_[k];
+    const bool keep = t.m == 0 ? t.p + t.q <= tangential_order && t.r <= normal_order : t.m <= contact_order;
+    if (keep) columns.push_back(k);
   }
   return columns;
 }

@@ -20,6 +20,8 @@ SurrogateFitOptions fit_options(const core::SurrogateSpec& spec) {
   o.max_force_order = spec.max_force_order;
   o.max_tangential_order = spec.max_tangential_order;
   o.max_normal_order = spec.max_normal_order;
+  o.max_contact_order = spec.max_contact_order;
+  o.contact_length = spec.contact_length;
   o.cv_folds = spec.cv_folds;
   return o;
 }
@@ -149,12 +151,14 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
     if (progress) {
       const ContactFit& f = d.contacts.back();
       std::string orders;
-      for (int j = 0; j < 3; ++j)
-        orders += fmt::format("{}{}: lambda {} (CV {:.3g} mm), (a, b) = ({},{}) ({},{}) ({},{})", j ? "; " : "", "xyz"[j],
-                              f.axis[j].force_order, f.axis[j].contact_cv_rms * 1e3, f.axis[j].field[0].tangential_order,
-                              f.axis[j].field[0].normal_order, f.axis[j].field[1].tangential_order,
-                              f.axis[j].field[1].normal_order, f.axis[j].field[2].tangential_order,
-                              f.axis[j].field[2].normal_order);
+      for (int j = 0; j < 3; ++j) {
+        const AxisFit& a = f.axis[j];
+        orders += fmt::format("{}{}: lambda {} (CV {:.3g} mm), (a,b,c)", j ? "; " : "", "xyz"[j], a.force_order,
+                              a.contact_cv_rms * 1e3);
+        for (const InducedFieldFit& field : a.field)
+          orders += fmt::format(" ({},{},{}) CV {:.3g} mm", field.tangential_order, field.normal_order,
+                                field.contact_order, field.cv_rms * 1e3);
+      }
       progress(fmt::format("fit contact {}/{}: {} ({:.1f} s)", ci + 1, contacts.size(), orders, seconds_since(t0)));
     }
   }

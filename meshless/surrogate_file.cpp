@@ -61,12 +61,16 @@ Eigen::MatrixXd matrix(const json& j, Eigen::Index rows, Eigen::Index cols) {
 json scores(const std::vector<CvScore>& v) {
   json a = json::array();
   for (const CvScore& s : v)
-    a.push_back({{"lambda", s.force_order}, {"a", s.tangential_order}, {"b", s.normal_order}, {"rms", s.rms}});
+    a.push_back({{"lambda", s.force_order},
+                 {"a", s.tangential_order},
+                 {"b", s.normal_order},
+                 {"c", s.contact_order},
+                 {"rms", s.rms}});
   return a;
 }
 std::vector<CvScore> scores(const json& j) {
   std::vector<CvScore> v;
-  for (const json& s : j) v.push_back({s.at("lambda"), s.at("a"), s.at("b"), s.at("rms")});
+  for (const json& s : j) v.push_back({s.at("lambda"), s.at("a"), s.at("b"), s.at("c"), s.at("rms")});
   return v;
 }
 
@@ -80,6 +84,7 @@ json to_json(const ContactFit& c) {
       fields.push_back({{"component", kAxisName[i]},
                         {"a", f.tangential_order},
                         {"b", f.normal_order},
+                        {"c", f.contact_order},
                         {"coefficients", matrix(f.coefficients)},
                         {"cv_rms", f.cv_rms},
                         {"cv_grid", scores(f.grid)}});
@@ -108,7 +113,8 @@ json to_json(const ContactFit& c) {
             {"tangent1", vec(c.frame.tangent1)},
             {"tangent2", vec(c.frame.tangent2)},
             {"normal", vec(c.frame.normal)},
-            {"length", c.frame.length}}},
+            {"length", c.frame.length},
+            {"contact_length", c.frame.contact_length}}},
           {"axes", axes},
           {"ceres_summaries", summaries}};
 }
@@ -122,6 +128,8 @@ ContactFit contact_from_json(const json& j) {
   c.frame.tangent2 = vec(f.at("tangent2"));
   c.frame.normal = vec(f.at("normal"));
   c.frame.length = f.at("length");
+  c.frame.contact_length = f.at("contact_length");
+  if (!(c.frame.length > 0.0) || !(c.frame.contact_length > 0.0)) throw std::runtime_error("non-positive frame lengths");
   if (j.at("axes").size() != 3) throw std::runtime_error("expected 3 axes per contact");
   for (int k = 0; k < 3; ++k) {
     const json& a = j.at("axes")[k];
@@ -138,10 +146,12 @@ ContactFit contact_from_json(const json& j) {
       InducedFieldFit& field = axis.field[i];
       field.tangential_order = fj.at("a");
       field.normal_order = fj.at("b");
+      field.contact_order = fj.at("c");
       if (field.tangential_order < 0 || field.tangential_order > 12 || field.normal_order < 0 ||
-          field.normal_order > 8)
+          field.normal_order > 8 || field.contact_order < 0 || field.contact_order > 6)
         throw std::runtime_error("eq. 28 orders outside their ranges");
-      const SpatialBasis basis(field.tangential_order, field.normal_order);
+      const SpatialBasis basis(field.tangential_order, field.normal_order, field.contact_order,
+                               c.frame.contact_length / c.frame.length);
       field.coefficients = matrix(fj.at("coefficients"), basis.size(), axis.force_order);
       field.cv_rms = fj.at("cv_rms");
       field.grid = scores(fj.at("cv_grid"));
@@ -156,7 +166,7 @@ ContactFit contact_from_json(const json& j) {
 json content(const SurrogateData& d) {
   json positions = json::array();
   for (Eigen::Index s = 0; s < d.surface_position.rows(); ++s)
-    positions.push_back(vec(d.surface_position.row(s).transpose()));
+    positions.push_back(vec(Eigen::Vector3d(d.surface_position.row(s).transpose())));
   json contacts = json::array();
   for (const ContactFit& c : d.contacts) contacts.push_back(to_json(c));
   return {{"format", kFormatName},

@@ -153,7 +153,7 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
           if (fold[l] == f) sq += std::pow(u_scale * polynomial(r, s[l]) - u[l][i], 2);
       }
     }
-    out->force_order_cv.push_back({order, 0, 0, std::sqrt(sq / n)});
+    out->force_order_cv.push_back({order, 0, 0, 0, std::sqrt(sq / n)});
   }
   if (!out->force_order_cv.empty()) {
     const std::size_t pick = most_parsimonious(out->force_order_cv);
@@ -205,6 +205,8 @@ bool SurrogateFitOptions::IsValid(std::string* error) const {
   if (max_force_order < 1 || max_force_order > 8) return fail("max_force_order must be in [1, 8]");
   if (max_tangential_order < 0 || max_tangential_order > 12) return fail("max_tangential_order must be in [0, 12]");
   if (max_normal_order < 0 || max_normal_order > 8) return fail("max_normal_order must be in [0, 8]");
+  if (max_contact_order < 0 || max_contact_order > 6) return fail("max_contact_order must be in [0, 6]");
+  if (max_contact_order > 0 && !(contact_length > 0.0)) return fail("contact_length must be > 0 with contact terms");
   if (cv_folds < 2) return fail("cv_folds must be >= 2");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
   if (!(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0))
@@ -235,8 +237,10 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   const Eigen::Vector3d xc = surface.position.row(data.contact).transpose();
   double length = 0.0;
   for (int i = 0; i < ns; ++i) length = std::max(length, (surface.position.row(i).transpose() - xc).norm());
-  out.frame = SurfaceFrame::at(xc, surface.normal.row(data.contact).transpose(), length);
-  const SpatialBasis full(options.max_tangential_order, options.max_normal_order);
+  out.frame = SurfaceFrame::at(xc, surface.normal.row(data.contact).transpose(), length,
+                               options.contact_length > 0.0 ? options.contact_length : length);
+  const SpatialBasis full(options.max_tangential_order, options.max_normal_order, options.max_contact_order,
+                          out.frame.contact_length / length);
   Eigen::MatrixX3d local(ns, 3);
   for (int i = 0; i < ns; ++i) local.row(i) = out.frame.local(surface.position.row(i).transpose()).transpose();
   const Eigen::MatrixXd psi = full.evaluate(local);  // #S by #basis at the largest orders
@@ -245,16 +249,17 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   const int k = std::min(options.cv_folds, ns);
   const std::vector<int> fold = node_folds(ns, k, options.cv_seed);
   struct Candidate {
-    int a, b;
+    int a, b, c;
     std::vector<int> cols;
   };
   std::vector<Candidate> candidates;
   const int smallest_training = ns - (ns + k - 1) / k;
   for (int a = 0; a <= options.max_tangential_order; ++a)
-    for (int b = 0; b <= options.max_normal_order; ++b) {
-      std::vector<int> cols = full.subset(a, b);
-      if (2 * static_cast<int>(cols.size()) <= smallest_training) candidates.push_back({a, b, std::move(cols)});
-    }
+    for (int b = 0; b <= options.max_normal_order; ++b)
+      for (int c = 0; c <= options.max_contact_order; ++c) {
+        std::vector<int> cols = full.subset(a, b, c);
+        if (2 * static_cast<int>(cols.size()) <= smallest_training) candidates.push_back({a, b, c, std::move(cols)});
+      }
   if (candidates.empty())
     throw std::invalid_argument(fmt::format("fit_contact: {} surface nodes are too few for {}-fold cross-validation",
                                             ns, k));
@@ -306,11 +311,12 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     for (int i = 0; i < 3; ++i) {
       InducedFieldFit& field = axis.field[i];
       for (std::size_t c = 0; c < candidates.size(); ++c)
-        field.grid.push_back({order, candidates[c].a, candidates[c].b,
+        field.grid.push_back({order, candidates[c].a, candidates[c].b, candidates[c].c,
                               u_scale * std::sqrt(sq[i][c] / (static_cast<double>(ns) * nl))});
       const std::size_t best = most_parsimonious(field.grid);
       field.tangential_order = candidates[best].a;
       field.normal_order = candidates[best].b;
+      field.contact_order = candidates[best].c;
       field.cv_rms = field.grid[best].rms;
 
       // The fit itself: Ceres LM on every surface node, one problem per force power.
@@ -339,7 +345,8 @@ Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFra
   Eigen::MatrixXd out(3 * ns, axis.force_order);
   for (int i = 0; i < 3; ++i) {
     const InducedFieldFit& field = axis.field[i];
-    const SpatialBasis basis(field.tangential_order, field.normal_order);
+    const SpatialBasis basis(field.tangential_order, field.normal_order, field.contact_order,
+                             frame.contact_length / frame.length);
     if (basis.size() != field.coefficients.rows() || field.coefficients.cols() != axis.force_order)
       throw std::invalid_argument("nodal_coefficients: coefficient matrix does not match the orders");
     std::vector<double> psi(basis.size());

@@ -7,7 +7,8 @@
 //  * eqs. 25-27, the stressed node:  u_i(sigma) = sum_{p=1..lambda} r_ip sigma^p, for the three components i
 //    (the paper's diagonal i = j, plus the cross terms a curved surface has);
 //  * eq. 28, the induced field:  u_i(X, sigma) = sum_{p=1..lambda} sigma^p sum_k c_ipk psi_k(xi, eta, zeta), with
-//    psi the surface-local monomials of orders (a_i, b_i) (meshless/surrogate_basis.hpp).
+//    psi the surface-local polynomial of orders (a_i, b_i) plus contact terms of order c_i
+//    (meshless/surrogate_basis.hpp).
 #include <Eigen/Core>
 #include <array>
 #include <string>
@@ -22,7 +23,9 @@ namespace meshless {
 struct SurrogateFitOptions {
   int max_force_order = 4;       ///< lambda tried: 1..max_force_order
   int max_tangential_order = 6;  ///< a tried: 0..max
-  int max_normal_order = 3;      ///< b tried: 0..max
+  int max_normal_order = 2;      ///< b tried: 0..max
+  int max_contact_order = 2;     ///< c tried: 0..max
+  double contact_length = 0.0;   ///< [m] l of the contact terms (> 0 when max_contact_order > 0)
   int cv_folds = 5;              ///< k of the k-fold cross-validation
   unsigned cv_seed = 1;          ///< partition of the surface nodes into folds (deterministic)
   // Ceres Levenberg-Marquardt. The fitted problems are linear least squares in scaled units (O(1) coefficients),
@@ -48,6 +51,7 @@ struct CvScore {
   int force_order = 0;       ///< lambda
   int tangential_order = 0;  ///< a (eq. 28 only)
   int normal_order = 0;      ///< b (eq. 28 only)
+  int contact_order = 0;     ///< c (eq. 28 only)
   double rms = 0.0;          ///< RMS of the held-out errors [m]
 };
 
@@ -63,11 +67,11 @@ struct FitSummary {
 
 /// Eq. 28 for one displacement component.
 struct InducedFieldFit {
-  int tangential_order = 0, normal_order = 0;  ///< a, b
+  int tangential_order = 0, normal_order = 0, contact_order = 0;  ///< a, b, c
   /// #basis by lambda: c_ipk, the coefficient of psi_k(X) sigma^p [m / N^p]
   Eigen::MatrixXd coefficients;
-  double cv_rms = 0.0;          ///< cross-validation error of the chosen (a, b) [m]
-  std::vector<CvScore> grid;    ///< every (a, b) tried
+  double cv_rms = 0.0;          ///< cross-validation error of the chosen (a, b, c) [m]
+  std::vector<CvScore> grid;    ///< every (a, b, c) tried
 };
 
 /// One force axis of one contact node.

@@ -48,6 +48,7 @@ core::SurrogateSpec box_spec() {
   core::SurrogateSpec s;
   s.contact_points = {{20 * kMm, 20 * kMm, 20 * kMm}};
   s.patch_radius = 6 * kMm;
+  s.contact_length = 12 * kMm;  // the case reader's default, 2 * patch_radius
   s.max_force = 0.05;  // 0.44 kPa on the patch: a few % strain, well inside the k = 1 law's range
   s.force_levels = 4;
   s.holdout_forces = 2;
@@ -55,21 +56,36 @@ core::SurrogateSpec box_spec() {
 }
 
 TEST(SurrogateBasis, SubsetsMatchTheSmallerBasisAndTheFrameIsOrthonormal) {
-  const SpatialBasis full(6, 3);
-  EXPECT_EQ(full.size(), 28 * 4);
+  const SpatialBasis full(6, 3, 2, 0.1);
+  EXPECT_EQ(full.size(), 28 * 4 + 2 * 10);
   for (int a = 0; a <= 6; ++a)
-    for (int b = 0; b <= 3; ++b) {
-      const SpatialBasis small(a, b);
-      const std::vector<int> cols = full.subset(a, b);
-      ASSERT_EQ(static_cast<int>(cols.size()), small.size());
-      for (int k = 0; k < small.size(); ++k) EXPECT_EQ(full.exponents()[cols[k]], small.exponents()[k]);
-    }
-  const SurfaceFrame f = SurfaceFrame::at({1, 2, 3}, {0.3, -0.2, 0.9}, 2.0);
+    for (int b = 0; b <= 3; ++b)
+      for (int c = 0; c <= 2; ++c) {
+        const SpatialBasis small(a, b, c, 0.1);
+        const std::vector<int> cols = full.subset(a, b, c);
+        ASSERT_EQ(static_cast<int>(cols.size()), small.size());
+        for (int k = 0; k < small.size(); ++k) EXPECT_EQ(full.terms()[cols[k]], small.terms()[k]);
+        // and the same values
+        const Eigen::Vector3d x(0.3, -0.2, 0.05);
+        std::vector<double> vf(full.size()), vs(small.size());
+        full.evaluate(x, vf.data());
+        small.evaluate(x, vs.data());
+        for (int k = 0; k < small.size(); ++k) EXPECT_EQ(vf[cols[k]], vs[k]);
+      }
+  // The contact terms of order 1 are the regularised Kelvin solution: s (delta_ij + e_i e_j) is in their span.
+  const SpatialBasis kelvin(0, 0, 1, 0.1);
+  const Eigen::Vector3d x(0.3, -0.2, 0.05);
+  std::vector<double> v(kelvin.size());
+  kelvin.evaluate(x, v.data());
+  const double rho = std::sqrt(x.squaredNorm() + 0.01);
+  EXPECT_DOUBLE_EQ(v[1], 0.1 / rho);                         // s
+  EXPECT_DOUBLE_EQ(v[1 + 4], 0.1 / rho * x.x() * x.x() / (rho * rho));  // s e_xi^2
+  const SurfaceFrame f = SurfaceFrame::at({1, 2, 3}, {0.3, -0.2, 0.9}, 2.0, 0.5);
   EXPECT_NEAR(f.tangent1.dot(f.tangent2), 0.0, 1e-15);
   EXPECT_NEAR(f.tangent1.dot(f.normal), 0.0, 1e-15);
   EXPECT_NEAR(f.tangent1.cross(f.tangent2).dot(f.normal), 1.0, 1e-15);  // right-handed
-  const Eigen::Vector3d x = f.origin + 2.0 * (0.1 * f.tangent1 - 0.4 * f.tangent2 + 0.25 * f.normal);
-  EXPECT_TRUE(f.local(x).isApprox(Eigen::Vector3d(0.1, -0.4, 0.25), 1e-14));
+  const Eigen::Vector3d y = f.origin + 2.0 * (0.1 * f.tangent1 - 0.4 * f.tangent2 + 0.25 * f.normal);
+  EXPECT_TRUE(f.local(y).isApprox(Eigen::Vector3d(0.1, -0.4, 0.25), 1e-14));
 }
 
 TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationPicksItsOrder) {
@@ -92,11 +108,13 @@ TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationP
   SurrogateFitOptions options;
   options.max_tangential_order = 0;
   options.max_normal_order = 0;
+  options.max_contact_order = 0;
   options.cv_folds = 4;
   // One surface node cannot be cross-validated spatially: fit the contact node alone through the public path by
   // giving it enough copies of itself.
   surface.vertex.assign(12, 0);
   surface.position = core::PointMatrix::Zero(12, 3);
+  for (int i = 0; i < 12; ++i) surface.position.row(i) << 1e-3 * (i % 4), 1e-3 * (i / 4), 0.0;
   surface.normal = core::PointMatrix::Zero(12, 3);
   surface.normal.col(2).setOnes();
   for (int j = 0; j < 3; ++j)
@@ -123,7 +141,7 @@ TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheClosedFormLeastSqua
   // A noisy field over random 3-D points: Ceres' minimiser of sum (psi . c - t)^2 is the QR solution.
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-  const SpatialBasis basis(4, 2);
+  const SpatialBasis basis(4, 2, 1, 0.2);
   const int n = 300;
   Eigen::MatrixX3d local(n, 3);
   for (int i = 0; i < n; ++i) local.row(i) << uniform(rng), uniform(rng), uniform(rng);
@@ -158,11 +176,10 @@ TEST(SurrogateLoadPatch, SelectsTheFacesAroundTheContactOnItsSide) {
   const int c = surface.nearest({20 * kMm, 20 * kMm, 20 * kMm});
   EXPECT_TRUE(surface.normal.row(c).isApprox(Eigen::RowVector3d(0, 0, 1), 1e-12));
   const LoadPatch p = load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 6 * kMm);
-  // On the 5 mm grid, split into two triangles per square, the faces whose centroid is within 6 mm of the centre:
-  // the 4 squares around it give 8 faces (centroids at 2.36 and 3.33 mm); the 8 squares beyond give 8 more
-  // (centroids at 5.27 mm) and the rest are farther than 6 mm.
-  EXPECT_EQ(p.num_faces, 16);
-  EXPECT_NEAR(p.area, 16 * 12.5 * kMm * kMm, 1e-12);
+  // On the 5 mm grid, two triangles per square: the 8 triangles of the 4 squares around the centre have their
+  // centroids 2.4-4.7 mm away, the next ring's are at least 6.9 mm away.
+  EXPECT_EQ(p.num_faces, 8);
+  EXPECT_NEAR(p.area, 8 * 12.5 * kMm * kMm, 1e-12);
   // The far side (the base) is never loaded, whatever the radius.
   const LoadPatch wide = load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 1.0);
   EXPECT_NEAR(wide.area, 40 * 40 * kMm * kMm, 1e-12);
