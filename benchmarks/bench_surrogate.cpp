@@ -6,7 +6,8 @@
 //  * BM_FullSolve/box and /shipped: what a query replaces, measured in the same run: the full meshless model solving
 //    one patch load up to the response step on a set-up model (EfgModel::restart + time steps + interpolation).
 //    For `shipped` the case named in TISSUE_SURROGATE_CASE (default configs/lung_surrogate.json) is meshed first.
-//  * BM_SurrogateTraining/box: training + fitting + held-out check of the box surrogate, with the file size.
+//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate_box_case.hpp), with the
+//    file size.
 #include <benchmark/benchmark.h>
 
 #include <algorithm>
@@ -17,41 +18,19 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
-#include "meshless/box_mesh.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/surrogate.hpp"
+#include "meshless/surrogate_box_case.hpp"
 #include "meshless/surrogate_builder.hpp"
 #include "meshless/surrogate_file.hpp"
 
 namespace {
 
-constexpr double kMm = 1e-3;
-
-/// The box of tests/test_surrogate.cpp: 40 x 40 x 20 mm, 5 mm nodes (405), clamped base, lung material, k = 1.
-meshless::EfgProblem box_problem() {
-  meshless::EfgProblem p;
-  p.name = "surrogate box";
-  p.mesh = meshless::make_box_mesh({0, 0, 0}, {40 * kMm, 40 * kMm, 20 * kMm}, 8, 8, 4,
-                                   [](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
-                                     return c.z() < 1e-9 ? core::FaceTag::fixed : core::FaceTag::free_surface;
-                                   });
-  p.material = {6000.0, 12000.0, 18000.0, 0.4, 1.0};
-  p.support.d_max = 2.0;
-  p.support.k = 6;
-  p.node_spacing = 5 * kMm;
-  p.load_scale = [](double t) { return std::min(t, 1.0); };
-  p.step_times = {0.5, 1.0};
-  return p;
-}
+meshless::EfgProblem box_problem() { return meshless::surrogate_box_problem(); }
 
 core::SurrogateSpec box_spec() {
-  core::SurrogateSpec s;
-  s.contact_points = {{20 * kMm, 20 * kMm, 20 * kMm}};
-  s.patch_radius = 6 * kMm;
-  s.contact_length = 12 * kMm;  // the case reader's default, 2 * patch_radius
-  s.max_force = 0.05;
-  s.force_levels = 4;
-  s.holdout_forces = 0;
+  core::SurrogateSpec s = meshless::surrogate_box_spec();
+  s.holdout_forces = 0;  // timed separately
   return s;
 }
 

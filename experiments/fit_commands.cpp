@@ -46,15 +46,17 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
     const Eigen::Vector3d x = f.frame.origin * 1e3;
     std::cout << fmt::format("contact {} at ({:.2f}, {:.2f}, {:.2f}) mm (snapped {:.2f} mm):\n", c + 1, x.x(), x.y(),
                              x.z(), r.snap_distance[c] * 1e3);
-    std::cout << "  axis  lambda  CV eqs.25-27 [mm]  (a,b,c) CV eq.28 [mm] for u_x | u_y | u_z      training RMS [mm]\n";
+    std::cout << "  axis  lambda (CV eqs. 25-27 [mm])  field lambda (CV [mm])  (a,b,c) CV eq. 28 [mm] for u_x | u_y | u_z"
+                 "  training RMS eq. 28 [mm]\n";
     for (int j = 0; j < 3; ++j) {
       const meshless::AxisFit& a = f.axis[j];
       std::string fields;
       for (int i = 0; i < 3; ++i)
         fields += fmt::format("{}({},{},{}) {:.2e}", i ? " | " : "", a.field[i].tangential_order,
                               a.field[i].normal_order, a.field[i].contact_order, a.field[i].cv_rms * 1e3);
-      std::cout << fmt::format("  {}     {}       {:.3e}          {}   {:.3e}\n", "xyz"[j], a.force_order,
-                               a.contact_cv_rms * 1e3, fields, a.training_rms * 1e3);
+      std::cout << fmt::format("  {}     {} ({:.2e})                 {} ({:.2e})          {}  {:.2e}\n", "xyz"[j],
+                               a.force_order, a.contact_cv_rms * 1e3, a.field_order, a.field_order_cv_rms * 1e3,
+                               fields, a.training_rms * 1e3);
     }
     for (const meshless::FitSummary& s : f.summaries) {
       ++terminations[s.termination];

@@ -6,6 +6,9 @@
 #include <stdexcept>
 
 namespace meshless {
+namespace {
+constexpr int kMaxOrder = 8;  // largest force order a surrogate may hold (SurrogateFitOptions::IsValid)
+}  // namespace
 
 Surrogate::Surrogate(SurrogateData data, double contact_tolerance) : data_(std::move(data)) {
   tolerance_ = contact_tolerance > 0.0 ? contact_tolerance : data_.patch_radius;
@@ -19,15 +22,17 @@ Surrogate::Surrogate(SurrogateData data, double contact_tolerance) : data_(std::
       throw std::invalid_argument("Surrogate: a contact node is not a surface node");
     int columns = 0;
     for (const AxisFit& a : c.axis) {
-      if (a.force_order < 1 || a.contact.cols() != a.force_order)
+      if (a.force_order < 1 || a.force_order > kMaxOrder || a.contact.cols() != a.force_order)
         throw std::invalid_argument("Surrogate: eqs. 25-27 coefficients do not match lambda");
-      columns += a.force_order;
+      if (a.field_order < 1 || a.field_order > kMaxOrder)
+        throw std::invalid_argument("Surrogate: eq. 28 force order outside [1, 8]");
+      columns += a.field_order;
     }
     Eigen::MatrixXd m(3 * num_surface_nodes(), columns);
     int col = 0;
     for (const AxisFit& a : c.axis) {
-      m.middleCols(col, a.force_order) = nodal_coefficients(surface, c.frame, a);
-      col += a.force_order;
+      m.middleCols(col, a.field_order) = nodal_coefficients(surface, c.frame, a);
+      col += a.field_order;
     }
     nodal_.push_back(std::move(m));
   }
@@ -57,22 +62,23 @@ SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Ve
     if (!(std::abs(force[j]) <= f_max * (1.0 + 1e-12))) r.force_in_range = false;
   }
 
-  // Powers sigma_j^p, p = 1..lambda_j, in the column order of nodal_ (at most 3 x 8).
-  double powers[24];
-  int n = 0;
+  // Powers sigma_j^p, p = 1..8.
+  double power[3][kMaxOrder];
   for (int j = 0; j < 3; ++j) {
-    double p = r.force[j];
-    for (int k = 0; k < fit.axis[j].force_order; ++k, p *= r.force[j]) powers[n++] = p;
+    power[j][0] = r.force[j];
+    for (int p = 1; p < kMaxOrder; ++p) power[j][p] = power[j][p - 1] * r.force[j];
   }
-  const Eigen::Map<const Eigen::VectorXd> sigma(powers, n);
-
   // Eqs. 25-27 at the contact node, the three axes superposed.
-  n = 0;
   for (int j = 0; j < 3; ++j) {
-    const int order = fit.axis[j].force_order;
-    r.contact_displacement.noalias() += fit.axis[j].contact * sigma.segment(n, order);
-    n += order;
+    const AxisFit& a = fit.axis[j];
+    r.contact_displacement.noalias() += a.contact * Eigen::Map<const Eigen::VectorXd>(power[j], a.force_order);
   }
+  // The powers of eq. 28 in the column order of nodal_ (field orders of x, then y, then z).
+  double field_powers[3 * kMaxOrder];
+  int n = 0;
+  for (int j = 0; j < 3; ++j)
+    for (int p = 0; p < fit.axis[j].field_order; ++p) field_powers[n++] = power[j][p];
+  const Eigen::Map<const Eigen::VectorXd> sigma(field_powers, n);
 
   // Eq. 28 at every surface node: one matrix-vector product.
   const int ns = num_surface_nodes();

@@ -148,13 +148,15 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
       }
     const auto t0 = std::chrono::steady_clock::now();
     d.contacts.push_back(fit_contact(surface, data, spec.max_force, fit));
+    rep.training_data.push_back(std::move(data));
     if (progress) {
       const ContactFit& f = d.contacts.back();
       std::string orders;
       for (int j = 0; j < 3; ++j) {
         const AxisFit& a = f.axis[j];
-        orders += fmt::format("{}{}: lambda {} (CV {:.3g} mm), (a,b,c)", j ? "; " : "", "xyz"[j], a.force_order,
-                              a.contact_cv_rms * 1e3);
+        orders += fmt::format("{}{}: lambda {} (CV {:.3g} mm), field lambda {} (CV {:.3g} mm), (a,b,c)",
+                              j ? "; " : "", "xyz"[j], a.force_order, a.contact_cv_rms * 1e3, a.field_order,
+                              a.field_order_cv_rms * 1e3);
         for (const InducedFieldFit& field : a.field)
           orders += fmt::format(" ({},{},{}) CV {:.3g} mm", field.tangential_order, field.normal_order,
                                 field.contact_order, field.cv_rms * 1e3);
@@ -175,6 +177,8 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
         &rep.holdout);
     const Surrogate surrogate(d);
     rep.holdouts = holdout_errors(surrogate, holdout, full);
+    rep.holdout_loads = holdout;
+    rep.holdout_solves = full;
   }
 
   // The report kept in the file (for people; queries never read it).

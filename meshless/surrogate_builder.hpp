@@ -48,6 +48,10 @@ struct SurrogateBuildReport {
   double fit_seconds = 0.0;
   double peak_contact_displacement = 0.0;  ///< [m] largest |u| of a contact node over the training data
   std::vector<HoldoutError> holdouts;
+  /// The data behind the fits and the held-out check, to refit or compare without solving again.
+  std::vector<ContactTrainingData> training_data;
+  std::vector<PatchLoad> holdout_loads;
+  std::vector<SolvedLoad> holdout_solves;
 };
 
 /// Build the surrogate of `problem`'s cloud (its penalised faces, material, ramp and steps) as `spec` asks. The

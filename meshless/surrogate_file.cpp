@@ -94,6 +94,9 @@ json to_json(const ContactFit& c) {
                     {"contact_coefficients", matrix(a.contact)},
                     {"contact_cv_rms", a.contact_cv_rms},
                     {"lambda_cv", scores(a.force_order_cv)},
+                    {"field_lambda", a.field_order},
+                    {"field_lambda_cv_rms", a.field_order_cv_rms},
+                    {"field_lambda_cv", scores(a.field_order_cv)},
                     {"training_rms", a.training_rms},
                     {"induced_field", fields}});
   }
@@ -139,6 +142,10 @@ ContactFit contact_from_json(const json& j) {
     axis.contact = matrix(a.at("contact_coefficients"), 3, axis.force_order);
     axis.contact_cv_rms = a.at("contact_cv_rms");
     axis.force_order_cv = scores(a.at("lambda_cv"));
+    axis.field_order = a.at("field_lambda");
+    if (axis.field_order < 1 || axis.field_order > 8) throw std::runtime_error("field lambda outside [1, 8]");
+    axis.field_order_cv_rms = a.at("field_lambda_cv_rms");
+    axis.field_order_cv = scores(a.at("field_lambda_cv"));
     axis.training_rms = a.at("training_rms");
     if (a.at("induced_field").size() != 3) throw std::runtime_error("expected 3 induced-field components");
     for (int i = 0; i < 3; ++i) {
@@ -152,7 +159,7 @@ ContactFit contact_from_json(const json& j) {
         throw std::runtime_error("eq. 28 orders outside their ranges");
       const SpatialBasis basis(field.tangential_order, field.normal_order, field.contact_order,
                                c.frame.contact_length / c.frame.length);
-      field.coefficients = matrix(fj.at("coefficients"), basis.size(), axis.force_order);
+      field.coefficients = matrix(fj.at("coefficients"), basis.size(), axis.field_order);
       field.cv_rms = fj.at("cv_rms");
       field.grid = scores(fj.at("cv_grid"));
     }

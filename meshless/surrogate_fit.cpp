@@ -79,13 +79,16 @@ double polynomial(const Eigen::VectorXd& r, double s) {
 }
 
 /// The smallest candidate (in the order given: fewest coefficients first) whose cross-validation error is within
-/// kParsimony of the best one: a larger model must earn its coefficients.
+/// kParsimony of the best one, or at round-off level (kRoundOff of the data's scale): a larger model must earn
+/// its coefficients.
 constexpr double kParsimony = 0.01;
-std::size_t most_parsimonious(const std::vector<CvScore>& scores) {
+constexpr double kRoundOff = 1e-10;
+std::size_t most_parsimonious(const std::vector<CvScore>& scores, double data_scale) {
   double best = std::numeric_limits<double>::infinity();
   for (const CvScore& s : scores) best = std::min(best, s.rms);
+  const double good_enough = std::max((1.0 + kParsimony) * best, kRoundOff * data_scale);
   for (std::size_t i = 0; i < scores.size(); ++i)
-    if (scores[i].rms <= (1.0 + kParsimony) * best) return i;
+    if (scores[i].rms <= good_enough) return i;
   return 0;
 }
 
@@ -156,7 +159,7 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
     out->force_order_cv.push_back({order, 0, 0, 0, std::sqrt(sq / n)});
   }
   if (!out->force_order_cv.empty()) {
-    const std::size_t pick = most_parsimonious(out->force_order_cv);
+    const std::size_t pick = most_parsimonious(out->force_order_cv, u_scale);
     out->force_order = out->force_order_cv[pick].force_order;
     out->contact_cv_rms = out->force_order_cv[pick].rms;
   }
@@ -175,6 +178,41 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
     summaries->push_back(summary);
     for (int p = 0; p < out->force_order; ++p) out->contact(i, p) = r[p] * u_scale / std::pow(max_force, p + 1);
   }
+}
+
+/// The force order of eq. 28 by k-fold cross-validation over the levels (the same folds as eqs. 25-27), every
+/// surface node and component at once, in closed form (linear least squares).
+void choose_field_order(const std::vector<double>& s, const std::array<Eigen::MatrixXd, 3>& target, double u_scale,
+                        const SurrogateFitOptions& options, AxisFit* out) {
+  const int n = static_cast<int>(s.size());
+  const int k = std::min(options.cv_folds, n);
+  const int largest_fold = (n + k - 1) / k;
+  const Eigen::Index ns = target[0].rows();
+  for (int order = 1; order <= std::min(options.max_force_order, n - largest_fold); ++order) {
+    double sq = 0.0;
+    for (int f = 0; f < k; ++f) {
+      std::vector<double> st, sh;
+      std::vector<int> train, test;
+      for (int l = 0; l < n; ++l) {
+        (l % k == f ? sh : st).push_back(s[l]);
+        (l % k == f ? test : train).push_back(l);
+      }
+      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(force_powers(st, order));
+      const Eigen::MatrixXd vh = force_powers(sh, order);
+      for (int i = 0; i < 3; ++i) {
+        Eigen::MatrixXd yt(train.size(), ns), yh(test.size(), ns);
+        for (std::size_t r = 0; r < train.size(); ++r) yt.row(r) = target[i].col(train[r]).transpose();
+        for (std::size_t r = 0; r < test.size(); ++r) yh.row(r) = target[i].col(test[r]).transpose();
+        sq += (vh * qr.solve(yt) - yh).squaredNorm();
+      }
+    }
+    out->field_order_cv.push_back({order, 0, 0, 0, u_scale * std::sqrt(sq / (static_cast<double>(ns) * n))});
+  }
+  if (out->field_order_cv.empty())
+    throw std::runtime_error("cross-validation of eq. 28 needs more force levels; raise surrogate.force_levels");
+  const std::size_t pick = most_parsimonious(out->field_order_cv, u_scale);
+  out->field_order = out->field_order_cv[pick].force_order;
+  out->field_order_cv_rms = out->field_order_cv[pick].rms;
 }
 
 /// Eq. 28's spatial fit of one power's per-node coefficients by Ceres LM: min sum_s (psi(X_s) . c - target_s)^2.
@@ -276,19 +314,21 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     std::vector<Eigen::Vector3d> uc(nl);
     for (int l = 0; l < nl; ++l) uc[l] = data.displacement[j][l].row(data.contact).transpose();
     fit_contact_node(s, uc, u_scale, max_force, j, options, &axis, &out.summaries);
-    const int order = axis.force_order;
+
+    std::array<Eigen::MatrixXd, 3> target;  // per component: #S by L, scaled data
+    for (int i = 0; i < 3; ++i) {
+      target[i].resize(ns, nl);
+      for (int l = 0; l < nl; ++l) target[i].col(l) = data.displacement[j][l].col(i) / u_scale;
+    }
+    choose_field_order(s, target, u_scale, options, &axis);
+    const int order = axis.field_order;
 
     // Stage 1: every node's least-squares force polynomial (eqs. 25-27 at each node), in scaled units. With the
     // Kronecker design psi (x) V, the joint least-squares fit of eq. 28 is psi^+ D V^+T: this stage, then stage 2.
     const Eigen::MatrixXd v = force_powers(s, order);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> vqr(v);
     std::array<Eigen::MatrixXd, 3> nodal;  // per component: #S by order
-    std::array<Eigen::MatrixXd, 3> target; // per component: #S by L, scaled data
-    for (int i = 0; i < 3; ++i) {
-      target[i].resize(ns, nl);
-      for (int l = 0; l < nl; ++l) target[i].col(l) = data.displacement[j][l].col(i) / u_scale;
-      nodal[i] = vqr.solve(target[i].transpose()).transpose();
-    }
+    for (int i = 0; i < 3; ++i) nodal[i] = vqr.solve(target[i].transpose()).transpose();
 
     // Stage 2 cross-validation of (a, b) per component, in closed form (the same linear least-squares problem
     // that Ceres solves below; a QR per fold and candidate serves the three components).
@@ -313,7 +353,7 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
       for (std::size_t c = 0; c < candidates.size(); ++c)
         field.grid.push_back({order, candidates[c].a, candidates[c].b, candidates[c].c,
                               u_scale * std::sqrt(sq[i][c] / (static_cast<double>(ns) * nl))});
-      const std::size_t best = most_parsimonious(field.grid);
+      const std::size_t best = most_parsimonious(field.grid, u_scale);
       field.tangential_order = candidates[best].a;
       field.normal_order = candidates[best].b;
       field.contact_order = candidates[best].c;
@@ -342,12 +382,12 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
 
 Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame, const AxisFit& axis) {
   const int ns = surface.size();
-  Eigen::MatrixXd out(3 * ns, axis.force_order);
+  Eigen::MatrixXd out(3 * ns, axis.field_order);
   for (int i = 0; i < 3; ++i) {
     const InducedFieldFit& field = axis.field[i];
     const SpatialBasis basis(field.tangential_order, field.normal_order, field.contact_order,
                              frame.contact_length / frame.length);
-    if (basis.size() != field.coefficients.rows() || field.coefficients.cols() != axis.force_order)
+    if (basis.size() != field.coefficients.rows() || field.coefficients.cols() != axis.field_order)
       throw std::invalid_argument("nodal_coefficients: coefficient matrix does not match the orders");
     std::vector<double> psi(basis.size());
     for (int s = 0; s < ns; ++s) {

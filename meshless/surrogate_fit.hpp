@@ -68,7 +68,7 @@ struct FitSummary {
 /// Eq. 28 for one displacement component.
 struct InducedFieldFit {
   int tangential_order = 0, normal_order = 0, contact_order = 0;  ///< a, b, c
-  /// #basis by lambda: c_ipk, the coefficient of psi_k(X) sigma^p [m / N^p]
+  /// #basis by the axis' field_order: c_ipk, the coefficient of psi_k(X) sigma^p [m / N^p]
   Eigen::MatrixXd coefficients;
   double cv_rms = 0.0;          ///< cross-validation error of the chosen (a, b, c) [m]
   std::vector<CvScore> grid;    ///< every (a, b, c) tried
@@ -76,10 +76,15 @@ struct InducedFieldFit {
 
 /// One force axis of one contact node.
 struct AxisFit {
-  int force_order = 0;                 ///< lambda_j
+  int force_order = 0;                 ///< lambda_j of eqs. 25-27 (the contact node)
   Eigen::Matrix3Xd contact;            ///< 3 by lambda: r_ip of eqs. 25-27 [m / N^p]
   double contact_cv_rms = 0.0;         ///< cross-validation error of the chosen lambda [m]
   std::vector<CvScore> force_order_cv; ///< every lambda tried
+  /// The force order of eq. 28, chosen by its own cross-validation over the levels on every surface node: the
+  /// field away from the contact need not be as (non)linear in the force as the contact node.
+  int field_order = 0;
+  double field_order_cv_rms = 0.0;     ///< [m]
+  std::vector<CvScore> field_order_cv;
   std::array<InducedFieldFit, 3> field;  ///< per displacement component
   double training_rms = 0.0;           ///< eq. 28 against the training data over all surface nodes and levels [m]
 };
@@ -97,7 +102,7 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
                        const SurrogateFitOptions& options);
 
 /// The surrogate's surface nodes' per-node force polynomials of one axis (the eq. 28 functions evaluated at the
-/// nodes): #S*3 by lambda, row 3s+i = component i of node s [m / N^p].
+/// nodes): #S*3 by the axis' field_order, row 3s+i = component i of node s [m / N^p].
 Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame, const AxisFit& axis);
 
 }  // namespace meshless
