@@ -1,12 +1,17 @@
 // The surrogate's real-time claim (paper §5.5, docs/SURROGATE.md §7, docs/PERFORMANCE.md):
-//  * BM_SurrogateQuery/box and /shipped: one full-surface query (contact-node displacement from eqs. 25-27 and every
-//    surface node's from eq. 28), with the per-query latency distribution (p50, p99, max) as counters; the goal is
-//    p99 <= 50 us, 20x inside a 1 kHz haptic frame. `shipped` is the surrogate file named by the environment
-//    variable TISSUE_SURROGATE (default results/surrogate/lung_small.surrogate.json), skipped when absent.
-//  * BM_FullSolve/box and /shipped: what a query replaces, measured in the same run: the full meshless model solving
-//    one patch load up to the response step on a set-up model (EfgModel::restart + time steps + interpolation).
-//    For `shipped` the case named in TISSUE_SURROGATE_CASE (default configs/lung_surrogate.json) is meshed first.
-//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate_box_case.hpp), with the
+//  * BM_SurrogateQuery/box and /shipped: one full-surface query (contact-node displacement from eqs. 25-27
+//  and every
+//    surface node's from eq. 28), with the per-query latency distribution (p50, p99, max) as counters; the
+//    goal is p99 <= 50 us, 20x inside a 1 kHz haptic frame. `shipped` is the surrogate file named by the
+//    environment variable TISSUE_SURROGATE (default results/surrogate/lung_small.surrogate.json), skipped
+//    when absent.
+//  * BM_FullSolve/box and /shipped: what a query replaces, measured in the same run: the full meshless model
+//  solving
+//    one patch load up to the response step on a set-up model (EfgModel::restart + time steps +
+//    interpolation). For `shipped` the case named in TISSUE_SURROGATE_CASE (default
+//    configs/lung_surrogate.json) is meshed first.
+//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate_box_case.hpp),
+//  with the
 //    file size.
 #include <benchmark/benchmark.h>
 
@@ -60,7 +65,8 @@ void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
   const double f = s.data().max_force;
   std::vector<Eigen::Vector3d> forces;
   for (int i = 0; i < 64; ++i)
-    forces.push_back(f * Eigen::Vector3d(std::sin(0.7 * i), std::cos(1.3 * i), std::sin(2.1 * i + 0.4)) / 1.8);
+    forces.push_back(f * Eigen::Vector3d(std::sin(0.7 * i), std::cos(1.3 * i), std::sin(2.1 * i + 0.4)) /
+                     1.8);
   core::PointMatrix u(s.num_surface_nodes(), 3);
   std::vector<double> latency;
   latency.reserve(1 << 20);
@@ -71,10 +77,13 @@ void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
     benchmark::DoNotOptimize(r);
     benchmark::DoNotOptimize(u.data());
     if (latency.size() < latency.capacity())
-      latency.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
+      latency.push_back(
+          std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
   std::sort(latency.begin(), latency.end());
-  auto at = [&](double p) { return latency[std::min(latency.size() - 1, static_cast<std::size_t>(p * latency.size()))]; };
+  auto at = [&](double p) {
+    return latency[std::min(latency.size() - 1, static_cast<std::size_t>(p * latency.size()))];
+  };
   state.counters["surface_nodes"] = s.num_surface_nodes();
   state.counters["p50_us"] = at(0.50);
   state.counters["p99_us"] = at(0.99);
@@ -82,7 +91,8 @@ void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
 }
 
 /// One patch load on a set-up model, to the response step: what a query replaces.
-void time_full_solve(benchmark::State& state, const meshless::EfgProblem& problem, const meshless::SurrogateData& d) {
+void time_full_solve(benchmark::State& state, const meshless::EfgProblem& problem,
+                     const meshless::SurrogateData& d) {
   const meshless::SurfaceNodes surface = meshless::surface_nodes(problem.mesh);
   meshless::PatchSolveOptions options;
   options.patch_radius = d.patch_radius;
@@ -90,7 +100,8 @@ void time_full_solve(benchmark::State& state, const meshless::EfgProblem& proble
   options.max_workers = 1;
   const meshless::PatchLoad load{d.contacts[0].contact, {0.0, 0.0, -0.5 * d.max_force}};
   for (auto _ : state) {
-    const std::vector<meshless::SolvedLoad> r = meshless::solve_patch_loads(problem, {}, surface, {load}, options);
+    const std::vector<meshless::SolvedLoad> r =
+        meshless::solve_patch_loads(problem, {}, surface, {load}, options);
     benchmark::DoNotOptimize(r);
     state.counters["solve_s"] = r[0].seconds;  // without the model's set-up
     state.counters["newton_iterations"] = r[0].newton_iterations;
@@ -99,15 +110,18 @@ void time_full_solve(benchmark::State& state, const meshless::EfgProblem& proble
   state.counters["surface_nodes"] = surface.size();
 }
 
-void BM_SurrogateQuery_box(benchmark::State& state) { time_queries(state, meshless::Surrogate(box_surrogate())); }
+void BM_SurrogateQuery_box(benchmark::State& state) {
+  time_queries(state, meshless::Surrogate(box_surrogate()));
+}
 
 void BM_FullSolve_box(benchmark::State& state) { time_full_solve(state, box_problem(), box_surrogate()); }
 
 void BM_SurrogateQuery_shipped(benchmark::State& state) {
   const meshless::Surrogate* s = shipped_surrogate();
   if (!s) {
-    state.SkipWithError("no shipped surrogate file (run `tissue fit configs/lung_surrogate.json --out "
-                        "results/surrogate/lung_small.surrogate.json` or set TISSUE_SURROGATE)");
+    state.SkipWithError(
+        "no shipped surrogate file (run `tissue fit configs/lung_surrogate.json --out "
+        "results/surrogate/lung_small.surrogate.json` or set TISSUE_SURROGATE)");
     return;
   }
   time_queries(state, *s);

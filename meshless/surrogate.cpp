@@ -44,7 +44,8 @@ SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Ve
   // Nearest trained contact node (a handful: a linear scan).
   double best = std::numeric_limits<double>::infinity();
   for (int c = 0; c < num_contacts(); ++c) {
-    const double d = (data_.surface_position.row(data_.contacts[c].contact).transpose() - point).squaredNorm();
+    const double d =
+        (data_.surface_position.row(data_.contacts[c].contact).transpose() - point).squaredNorm();
     if (d < best) {
       best = d;
       r.contact = c;
@@ -71,7 +72,8 @@ SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Ve
   // Eqs. 25-27 at the contact node, the three axes superposed.
   for (int j = 0; j < 3; ++j) {
     const AxisFit& a = fit.axis[j];
-    r.contact_displacement.noalias() += a.contact * Eigen::Map<const Eigen::VectorXd>(power[j], a.force_order);
+    r.contact_displacement.noalias() +=
+        a.contact * Eigen::Map<const Eigen::VectorXd>(power[j], a.force_order);
   }
   // The powers of eq. 28 in the column order of nodal_ (field orders of x, then y, then z).
   double field_powers[3 * kMaxOrder];

@@ -1,7 +1,6 @@
 #include "meshless/surrogate_basis.hpp"
 
 #include <Eigen/Geometry>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -9,7 +8,7 @@
 namespace meshless {
 namespace {
 
-constexpr int kMaxPower = 16;   // powers tabulated per coordinate
+constexpr int kMaxPower = 16;      // powers tabulated per coordinate
 constexpr int kContactDegree = 2;  // degree of the direction monomials of the contact terms (Kelvin: e_i e_j)
 
 }  // namespace
@@ -40,7 +39,8 @@ SpatialBasis::SpatialBasis(int tangential_order, int normal_order, int contact_o
     : a_(tangential_order), b_(normal_order), c_(contact_order), ell_(contact_length) {
   if (a_ < 0 || b_ < 0 || c_ < 0) throw std::invalid_argument("SpatialBasis: orders must be >= 0");
   if (std::max({a_, b_, c_}) >= kMaxPower) throw std::invalid_argument("SpatialBasis: orders must be < 16");
-  if (c_ > 0 && !(ell_ > 0.0)) throw std::invalid_argument("SpatialBasis: contact terms need a contact length > 0");
+  if (c_ > 0 && !(ell_ > 0.0))
+    throw std::invalid_argument("SpatialBasis: contact terms need a contact length > 0");
   for (int degree = 0; degree <= a_; ++degree)
     for (int q = 0; q <= degree; ++q)
       for (int r = 0; r <= b_; ++r) terms_.push_back({degree - q, q, r, 0});

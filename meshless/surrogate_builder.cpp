@@ -59,7 +59,8 @@ std::vector<PatchLoad> holdout_loads(const core::SurrogateSpec& spec, const std:
 
 std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::vector<PatchLoad>& loads,
                                          const std::vector<SolvedLoad>& full) {
-  if (loads.size() != full.size()) throw std::invalid_argument("holdout_errors: one full solve per load expected");
+  if (loads.size() != full.size())
+    throw std::invalid_argument("holdout_errors: one full solve per load expected");
   std::vector<HoldoutError> out;
   core::PointMatrix u;
   for (std::size_t i = 0; i < loads.size(); ++i) {
@@ -111,7 +112,8 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
     for (int previous : contacts)
       if (previous == c)
         throw std::invalid_argument(fmt::format(
-            "two contact points snap to the same surface node ({:.4g}, {:.4g}, {:.4g}) mm; expected distinct points "
+            "two contact points snap to the same surface node ({:.4g}, {:.4g}, {:.4g}) mm; expected distinct "
+            "points "
             "at least a node spacing apart",
             1e3 * surface.position(c, 0), 1e3 * surface.position(c, 1), 1e3 * surface.position(c, 2)));
     contacts.push_back(c);
@@ -161,7 +163,8 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
           orders += fmt::format(" ({},{},{}) CV {:.3g} mm", field.tangential_order, field.normal_order,
                                 field.contact_order, field.cv_rms * 1e3);
       }
-      progress(fmt::format("fit contact {}/{}: {} ({:.1f} s)", ci + 1, contacts.size(), orders, seconds_since(t0)));
+      progress(fmt::format("fit contact {}/{}: {} ({:.1f} s)", ci + 1, contacts.size(), orders,
+                           seconds_since(t0)));
     }
   }
   rep.fit_seconds = seconds_since(t_fit);
@@ -184,13 +187,14 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
   // The report kept in the file (for people; queries never read it).
   nlohmann::json holdouts = nlohmann::json::array();
   for (const HoldoutError& e : rep.holdouts)
-    holdouts.push_back({{"surface_node", e.load.contact},
-                        {"force_N", {e.load.force.x(), e.load.force.y(), e.load.force.z()}},
-                        {"rmse_m", e.rmse},
-                        {"contact_displacement_m", e.contact_displacement},
-                        {"rmse_relative_to_contact_displacement", e.relative},
-                        {"rmse_relative_to_peak_contact_displacement", e.rmse / rep.peak_contact_displacement},
-                        {"contact_error_m", e.contact_error}});
+    holdouts.push_back(
+        {{"surface_node", e.load.contact},
+         {"force_N", {e.load.force.x(), e.load.force.y(), e.load.force.z()}},
+         {"rmse_m", e.rmse},
+         {"contact_displacement_m", e.contact_displacement},
+         {"rmse_relative_to_contact_displacement", e.relative},
+         {"rmse_relative_to_peak_contact_displacement", e.rmse / rep.peak_contact_displacement},
+         {"contact_error_m", e.contact_error}});
   std::vector<double> snap_mm;
   for (double s : rep.snap_distance) snap_mm.push_back(s * 1e3);
   d.report = {{"training",

@@ -1,6 +1,7 @@
 #pragma once
-// Ceres residuals of the surrogate's fits (paper §3), fitted with Levenberg-Marquardt (meshless/surrogate_fit.hpp).
-// Each functor is templated for automatic differentiation; Create() hides the dynamic sizes.
+// Ceres residuals of the surrogate's fits (paper §3), fitted with Levenberg-Marquardt
+// (meshless/surrogate_fit.hpp). Each functor is templated for automatic differentiation; Create() hides the
+// dynamic sizes.
 //
 // Scaling: forces enter as s = sigma / max_force (in [-1, 1]) and displacements as u / u_scale, so the
 // coefficients are O(1) and Ceres' absolute tolerances mean the same for every case; the caller converts the
@@ -13,8 +14,8 @@ namespace meshless {
 
 /// Eqs. 25-27 for one displacement component of one node under one force axis:
 ///     u(s) = r_1 s + r_2 s^2 + ... + r_lambda s^lambda
-/// The paper's constant r_0 is dropped: the body starts undeformed, so u(0) = 0 exactly (docs/SURROGATE.md §3).
-/// One residual per trained force level; parameters: the lambda coefficients r_1..r_lambda.
+/// The paper's constant r_0 is dropped: the body starts undeformed, so u(0) = 0 exactly (docs/SURROGATE.md
+/// §3). One residual per trained force level; parameters: the lambda coefficients r_1..r_lambda.
 class ForcePolynomialResidual {
  public:
   ForcePolynomialResidual(double scaled_force, double scaled_displacement, int order)
@@ -46,11 +47,12 @@ class ForcePolynomialResidual {
   int order_;
 };
 
-/// Eq. 28 for one displacement component, one force power p and one surface node X: the spatial surface function
+/// Eq. 28 for one displacement component, one force power p and one surface node X: the spatial surface
+/// function
 ///     c_p(X) = sum_k c_pk psi_k(xi, eta, zeta)
-/// against that node's own coefficient of s^p (the per-node fit of eqs. 25-27 over all trained levels; fitting
-/// the two stages in turn is the joint least-squares fit, because the design is the Kronecker product of the
-/// force powers and the spatial basis: docs/SURROGATE.md §3). Parameters: the #basis coefficients c_p.
+/// against that node's own coefficient of s^p (the per-node fit of eqs. 25-27 over all trained levels;
+/// fitting the two stages in turn is the joint least-squares fit, because the design is the Kronecker product
+/// of the force powers and the spatial basis: docs/SURROGATE.md §3). Parameters: the #basis coefficients c_p.
 class InducedFieldResidual {
  public:
   /// @param basis psi_k(X) of this node, #basis values (copied)

@@ -34,7 +34,9 @@ std::string sha256_hex(const std::string& bytes) {
 }
 
 json vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
-Eigen::Vector3d vec(const json& j) { return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()}; }
+Eigen::Vector3d vec(const json& j) {
+  return {j.at(0).get<double>(), j.at(1).get<double>(), j.at(2).get<double>()};
+}
 
 /// Row-major nested arrays.
 json matrix(const Eigen::MatrixXd& m) {
@@ -132,7 +134,8 @@ ContactFit contact_from_json(const json& j) {
   c.frame.normal = vec(f.at("normal"));
   c.frame.length = f.at("length");
   c.frame.contact_length = f.at("contact_length");
-  if (!(c.frame.length > 0.0) || !(c.frame.contact_length > 0.0)) throw std::runtime_error("non-positive frame lengths");
+  if (!(c.frame.length > 0.0) || !(c.frame.contact_length > 0.0))
+    throw std::runtime_error("non-positive frame lengths");
   if (j.at("axes").size() != 3) throw std::runtime_error("expected 3 axes per contact");
   for (int k = 0; k < 3; ++k) {
     const json& a = j.at("axes")[k];
@@ -214,8 +217,8 @@ void write_surrogate(const std::string& path, const SurrogateData& data) {
   std::string temporary = (folder / ("." + destination.filename().string() + ".XXXXXX")).string();
   const int fd = mkstemp(temporary.data());
   if (fd < 0)
-    throw SurrogateFileError(path, fmt::format("cannot create a temporary file in {}: {}", folder.string(),
-                                               std::strerror(errno)));
+    throw SurrogateFileError(
+        path, fmt::format("cannot create a temporary file in {}: {}", folder.string(), std::strerror(errno)));
   std::size_t written = 0;
   while (written < text.size()) {
     const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
@@ -226,8 +229,8 @@ void write_surrogate(const std::string& path, const SurrogateData& data) {
   const int saved_errno = errno;
   if (::close(fd) != 0 || !complete) {
     std::remove(temporary.c_str());
-    throw SurrogateFileError(path, fmt::format("writing failed after {} of {} bytes: {}", written, text.size(),
-                                               std::strerror(saved_errno)));
+    throw SurrogateFileError(path, fmt::format("writing failed after {} of {} bytes: {}", written,
+                                               text.size(), std::strerror(saved_errno)));
   }
   std::error_code ec;
   std::filesystem::rename(temporary, destination, ec);
@@ -239,42 +242,48 @@ void write_surrogate(const std::string& path, const SurrogateData& data) {
 
 SurrogateData read_surrogate(const std::string& path, const std::optional<std::string>& expected_case_hash) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw SurrogateFileError(path, "cannot open the surrogate file (does it exist? `tissue fit CONFIG --out FILE` writes one)");
+  if (!in)
+    throw SurrogateFileError(
+        path, "cannot open the surrogate file (does it exist? `tissue fit CONFIG --out FILE` writes one)");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   json j;
   try {
     j = json::parse(text);
   } catch (const json::parse_error& e) {
-    throw SurrogateFileError(path, fmt::format("not a complete surrogate file ({} bytes; truncated, or not written by "
-                                               "`tissue fit`): {}",
-                                               text.size(), e.what()));
+    throw SurrogateFileError(
+        path, fmt::format("not a complete surrogate file ({} bytes; truncated, or not written by "
+                          "`tissue fit`): {}",
+                          text.size(), e.what()));
   }
   try {
     if (!j.is_object() || j.value("format", std::string()) != kFormatName)
-      throw SurrogateFileError(path, fmt::format("not a surrogate file: expected \"format\": \"{}\"", kFormatName));
+      throw SurrogateFileError(path,
+                               fmt::format("not a surrogate file: expected \"format\": \"{}\"", kFormatName));
     const int version = j.at("format_version");
     if (version != kSurrogateFormatVersion)
-      throw SurrogateFileError(path, fmt::format("format version {}, but this tissue reads version {}; re-run "
-                                                 "`tissue fit` to write a current file",
-                                                 version, kSurrogateFormatVersion));
+      throw SurrogateFileError(path,
+                               fmt::format("format version {}, but this tissue reads version {}; re-run "
+                                           "`tissue fit` to write a current file",
+                                           version, kSurrogateFormatVersion));
     if (j.at("units") != units())
-      throw SurrogateFileError(path, fmt::format("units {}, but this tissue reads {}", j.at("units").dump(),
-                                                 units().dump()));
+      throw SurrogateFileError(
+          path, fmt::format("units {}, but this tissue reads {}", j.at("units").dump(), units().dump()));
     const std::string checksum = j.at("checksum");
     json body = j;
     body.erase("checksum");
     if (sha256_hex(body.dump()) != checksum)
-      throw SurrogateFileError(path, "the content does not match its checksum (the file was edited or corrupted); "
-                                     "re-run `tissue fit`");
+      throw SurrogateFileError(path,
+                               "the content does not match its checksum (the file was edited or corrupted); "
+                               "re-run `tissue fit`");
     SurrogateData d;
     d.case_name = j.at("case").at("name");
     d.case_hash = j.at("case").at("hash");
     if (expected_case_hash && *expected_case_hash != d.case_hash)
-      throw SurrogateFileError(path, fmt::format("fitted for case '{}' with hash {}, but the given case has hash {}: "
-                                                 "the case changed since the fit (or is another case); re-run "
-                                                 "`tissue fit` on it",
-                                                 d.case_name, d.case_hash.substr(0, 12),
-                                                 expected_case_hash->substr(0, 12)));
+      throw SurrogateFileError(
+          path, fmt::format("fitted for case '{}' with hash {}, but the given case has hash {}: "
+                            "the case changed since the fit (or is another case); re-run "
+                            "`tissue fit` on it",
+                            d.case_name, d.case_hash.substr(0, 12), expected_case_hash->substr(0, 12)));
     const json& t = j.at("training");
     d.max_force = t.at("max_force");
     d.levels = t.at("levels").get<std::vector<double>>();
@@ -286,7 +295,8 @@ SurrogateData read_surrogate(const std::string& path, const std::optional<std::s
     if (positions.size() != d.surface_vertex.size())
       throw std::runtime_error("surface vertex and position counts differ");
     d.surface_position.resize(static_cast<Eigen::Index>(positions.size()), 3);
-    for (std::size_t s = 0; s < positions.size(); ++s) d.surface_position.row(s) = vec(positions[s]).transpose();
+    for (std::size_t s = 0; s < positions.size(); ++s)
+      d.surface_position.row(s) = vec(positions[s]).transpose();
     for (const json& c : j.at("contacts")) d.contacts.push_back(contact_from_json(c));
     d.report = j.at("report");
     return d;

@@ -1,8 +1,8 @@
 #include "meshless/surrogate_fit.hpp"
 
-#include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -48,10 +48,10 @@ FitSummary summarise(std::string what, const ceres::Solver::Summary& s) {
 /// Throws when Ceres did not produce a usable solution, with its own report and what to change.
 void require_usable(const FitSummary& f, const ceres::Solver::Summary& s) {
   if (f.usable && s.termination_type != ceres::FAILURE) return;
-  throw std::runtime_error(fmt::format(
-      "the Levenberg-Marquardt fit of {} failed ({}: {}); lower surrogate.max_force_order or "
-      "surrogate.max_tangential_order / max_normal_order",
-      f.what, f.termination, s.message));
+  throw std::runtime_error(
+      fmt::format("the Levenberg-Marquardt fit of {} failed ({}: {}); lower surrogate.max_force_order or "
+                  "surrogate.max_tangential_order / max_normal_order",
+                  f.what, f.termination, s.message));
 }
 
 /// Eqs. 25-27 for one component by Ceres LM: the coefficients r_1..r_order of s^1..s^order (scaled units).
@@ -78,9 +78,9 @@ double polynomial(const Eigen::VectorXd& r, double s) {
   return sum;
 }
 
-/// The smallest candidate (in the order given: fewest coefficients first) whose cross-validation error is within
-/// kParsimony of the best one, or at round-off level (kRoundOff of the data's scale): a larger model must earn
-/// its coefficients.
+/// The smallest candidate (in the order given: fewest coefficients first) whose cross-validation error is
+/// within kParsimony of the best one, or at round-off level (kRoundOff of the data's scale): a larger model
+/// must earn its coefficients.
 constexpr double kParsimony = 0.01;
 constexpr double kRoundOff = 1e-10;
 std::size_t most_parsimonious(const std::vector<CvScore>& scores, double data_scale) {
@@ -130,8 +130,8 @@ Eigen::MatrixXd columns(const Eigen::MatrixXd& m, const std::vector<int>& cols) 
   return out;
 }
 
-/// The contact node's eqs. 25-27 on one axis: lambda by k-fold cross-validation over the force levels, then the
-/// fit on every level.
+/// The contact node's eqs. 25-27 on one axis: lambda by k-fold cross-validation over the force levels, then
+/// the fit on every level.
 void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vector3d>& u, double u_scale,
                       double max_force, int axis, const SurrogateFitOptions& options, AxisFit* out,
                       std::vector<FitSummary>* summaries) {
@@ -151,7 +151,8 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
           for (int i = 0; i < 3; ++i) ut[i].push_back(u[l][i] / u_scale);
         }
       for (int i = 0; i < 3; ++i) {
-        const Eigen::VectorXd r = fit_force_polynomial(st, ut[i], order, options, "cross-validation", nullptr);
+        const Eigen::VectorXd r =
+            fit_force_polynomial(st, ut[i], order, options, "cross-validation", nullptr);
         for (int l = 0; l < n; ++l)
           if (fold[l] == f) sq += std::pow(u_scale * polynomial(r, s[l]) - u[l][i], 2);
       }
@@ -164,9 +165,10 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
     out->contact_cv_rms = out->force_order_cv[pick].rms;
   }
   if (out->force_order == 0)
-    throw std::runtime_error(fmt::format("cross-validation of eqs. 25-27 needs more force levels than {} with {} folds; "
-                                         "raise surrogate.force_levels or lower surrogate.cv_folds",
-                                         n, k));
+    throw std::runtime_error(
+        fmt::format("cross-validation of eqs. 25-27 needs more force levels than {} with {} folds; "
+                    "raise surrogate.force_levels or lower surrogate.cv_folds",
+                    n, k));
   out->contact.resize(3, out->force_order);
   for (int i = 0; i < 3; ++i) {
     std::vector<double> ui(n);
@@ -176,14 +178,15 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
         fit_force_polynomial(s, ui, out->force_order, options,
                              fmt::format("eqs. 25-27 axis {} component {}", kAxis[axis], kAxis[i]), &summary);
     summaries->push_back(summary);
-    for (int p = 0; p < out->force_order; ++p) out->contact(i, p) = r[p] * u_scale / std::pow(max_force, p + 1);
+    for (int p = 0; p < out->force_order; ++p)
+      out->contact(i, p) = r[p] * u_scale / std::pow(max_force, p + 1);
   }
 }
 
 /// The force order of eq. 28 by k-fold cross-validation over the levels (the same folds as eqs. 25-27), every
 /// surface node and component at once, in closed form (linear least squares).
-void choose_field_order(const std::vector<double>& s, const std::array<Eigen::MatrixXd, 3>& target, double u_scale,
-                        const SurrogateFitOptions& options, AxisFit* out) {
+void choose_field_order(const std::vector<double>& s, const std::array<Eigen::MatrixXd, 3>& target,
+                        double u_scale, const SurrogateFitOptions& options, AxisFit* out) {
   const int n = static_cast<int>(s.size());
   const int k = std::min(options.cv_folds, n);
   const int largest_fold = (n + k - 1) / k;
@@ -209,15 +212,18 @@ void choose_field_order(const std::vector<double>& s, const std::array<Eigen::Ma
     out->field_order_cv.push_back({order, 0, 0, 0, u_scale * std::sqrt(sq / (static_cast<double>(ns) * n))});
   }
   if (out->field_order_cv.empty())
-    throw std::runtime_error("cross-validation of eq. 28 needs more force levels; raise surrogate.force_levels");
+    throw std::runtime_error(
+        "cross-validation of eq. 28 needs more force levels; raise surrogate.force_levels");
   const std::size_t pick = most_parsimonious(out->field_order_cv, u_scale);
   out->field_order = out->field_order_cv[pick].force_order;
   out->field_order_cv_rms = out->field_order_cv[pick].rms;
 }
 
-/// Eq. 28's spatial fit of one power's per-node coefficients by Ceres LM: min sum_s (psi(X_s) . c - target_s)^2.
-Eigen::VectorXd fit_spatial(const Eigen::MatrixXd& psi, const Eigen::VectorXd& target, const SurrogateFitOptions& options,
-                            const std::string& what, FitSummary* summary) {
+/// Eq. 28's spatial fit of one power's per-node coefficients by Ceres LM: min sum_s (psi(X_s) . c -
+/// target_s)^2.
+Eigen::VectorXd fit_spatial(const Eigen::MatrixXd& psi, const Eigen::VectorXd& target,
+                            const SurrogateFitOptions& options, const std::string& what,
+                            FitSummary* summary) {
   const int nb = static_cast<int>(psi.cols());
   std::vector<double> c(nb, 0.0);
   ceres::Problem problem;
@@ -241,10 +247,12 @@ bool SurrogateFitOptions::IsValid(std::string* error) const {
     return false;
   };
   if (max_force_order < 1 || max_force_order > 8) return fail("max_force_order must be in [1, 8]");
-  if (max_tangential_order < 0 || max_tangential_order > 12) return fail("max_tangential_order must be in [0, 12]");
+  if (max_tangential_order < 0 || max_tangential_order > 12)
+    return fail("max_tangential_order must be in [0, 12]");
   if (max_normal_order < 0 || max_normal_order > 8) return fail("max_normal_order must be in [0, 8]");
   if (max_contact_order < 0 || max_contact_order > 6) return fail("max_contact_order must be in [0, 6]");
-  if (max_contact_order > 0 && !(contact_length > 0.0)) return fail("contact_length must be > 0 with contact terms");
+  if (max_contact_order > 0 && !(contact_length > 0.0))
+    return fail("contact_length must be > 0 with contact terms");
   if (cv_folds < 2) return fail("cv_folds must be >= 2");
   if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
   if (!(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0))
@@ -280,7 +288,8 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   const SpatialBasis full(options.max_tangential_order, options.max_normal_order, options.max_contact_order,
                           out.frame.contact_length / length);
   Eigen::MatrixX3d local(ns, 3);
-  for (int i = 0; i < ns; ++i) local.row(i) = out.frame.local(surface.position.row(i).transpose()).transpose();
+  for (int i = 0; i < ns; ++i)
+    local.row(i) = out.frame.local(surface.position.row(i).transpose()).transpose();
   const Eigen::MatrixXd psi = full.evaluate(local);  // #S by #basis at the largest orders
 
   // Spatial folds: every candidate (a, b) is scored on the same partition of the surface nodes.
@@ -296,11 +305,12 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     for (int b = 0; b <= options.max_normal_order; ++b)
       for (int c = 0; c <= options.max_contact_order; ++c) {
         std::vector<int> cols = full.subset(a, b, c);
-        if (2 * static_cast<int>(cols.size()) <= smallest_training) candidates.push_back({a, b, c, std::move(cols)});
+        if (2 * static_cast<int>(cols.size()) <= smallest_training)
+          candidates.push_back({a, b, c, std::move(cols)});
       }
   if (candidates.empty())
-    throw std::invalid_argument(fmt::format("fit_contact: {} surface nodes are too few for {}-fold cross-validation",
-                                            ns, k));
+    throw std::invalid_argument(
+        fmt::format("fit_contact: {} surface nodes are too few for {}-fold cross-validation", ns, k));
   // Fewest coefficients first, so that most_parsimonious() prefers the smaller of two equally good surfaces.
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& x, const Candidate& y) { return x.cols.size() < y.cols.size(); });
@@ -308,7 +318,8 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   for (int j = 0; j < 3; ++j) {
     AxisFit& axis = out.axis[j];
     double u_scale = 0.0;
-    for (const core::PointMatrix& d : data.displacement[j]) u_scale = std::max(u_scale, d.cwiseAbs().maxCoeff());
+    for (const core::PointMatrix& d : data.displacement[j])
+      u_scale = std::max(u_scale, d.cwiseAbs().maxCoeff());
     if (!(u_scale > 0.0)) u_scale = 1.0;
 
     std::vector<Eigen::Vector3d> uc(nl);
@@ -323,8 +334,9 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     choose_field_order(s, target, u_scale, options, &axis);
     const int order = axis.field_order;
 
-    // Stage 1: every node's least-squares force polynomial (eqs. 25-27 at each node), in scaled units. With the
-    // Kronecker design psi (x) V, the joint least-squares fit of eq. 28 is psi^+ D V^+T: this stage, then stage 2.
+    // Stage 1: every node's least-squares force polynomial (eqs. 25-27 at each node), in scaled units. With
+    // the Kronecker design psi (x) V, the joint least-squares fit of eq. 28 is psi^+ D V^+T: this stage, then
+    // stage 2.
     const Eigen::MatrixXd v = force_powers(s, order);
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> vqr(v);
     std::array<Eigen::MatrixXd, 3> nodal;  // per component: #S by order
@@ -364,9 +376,9 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
       field.coefficients.resize(basis.cols(), order);
       for (int p = 0; p < order; ++p) {
         FitSummary summary;
-        const Eigen::VectorXd c =
-            fit_spatial(basis, nodal[i].col(p), options,
-                        fmt::format("eq. 28 axis {} component {} power {}", kAxis[j], kAxis[i], p + 1), &summary);
+        const Eigen::VectorXd c = fit_spatial(
+            basis, nodal[i].col(p), options,
+            fmt::format("eq. 28 axis {} component {} power {}", kAxis[j], kAxis[i], p + 1), &summary);
         out.summaries.push_back(summary);
         field.coefficients.col(p) = c * u_scale / std::pow(max_force, p + 1);
       }
@@ -380,7 +392,8 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   return out;
 }
 
-Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame, const AxisFit& axis) {
+Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame,
+                                   const AxisFit& axis) {
   const int ns = surface.size();
   Eigen::MatrixXd out(3 * ns, axis.field_order);
   for (int i = 0; i < 3; ++i) {
@@ -392,7 +405,8 @@ Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFra
     std::vector<double> psi(basis.size());
     for (int s = 0; s < ns; ++s) {
       basis.evaluate(frame.local(surface.position.row(s).transpose()), psi.data());
-      out.row(3 * s + i) = Eigen::Map<const Eigen::RowVectorXd>(psi.data(), basis.size()) * field.coefficients;
+      out.row(3 * s + i) =
+          Eigen::Map<const Eigen::RowVectorXd>(psi.data(), basis.size()) * field.coefficients;
     }
   }
   return out;

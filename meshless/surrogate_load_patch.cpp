@@ -1,8 +1,8 @@
 #include "meshless/surrogate_load_patch.hpp"
 
-#include <Eigen/Geometry>
 #include <fmt/format.h>
 
+#include <Eigen/Geometry>
 #include <limits>
 #include <stdexcept>
 

@@ -1,7 +1,7 @@
 #pragma once
 // The load the surrogate trains with (docs/SURROGATE.md §1): a uniform traction on the boundary faces of ONE
-// fixed node cloud around a contact node, so that every contact point and force is solved on the same cloud and
-// the same MLS tables (no remeshing, unlike the case's imprinted load ball).
+// fixed node cloud around a contact node, so that every contact point and force is solved on the same cloud
+// and the same MLS tables (no remeshing, unlike the case's imprinted load ball).
 #include <Eigen/Core>
 #include <vector>
 
@@ -12,9 +12,9 @@ namespace meshless {
 /// The surface nodes of a node cloud: the vertices of its boundary faces, where the surrogate reports
 /// displacements (paper eq. 28: "every other node" of the surface).
 struct SurfaceNodes {
-  std::vector<int> vertex;    ///< #S mesh vertex ids, increasing
-  core::PointMatrix position; ///< #S by 3 [m]
-  core::PointMatrix normal;   ///< #S by 3 outward unit normals (area-weighted mean of the incident faces)
+  std::vector<int> vertex;     ///< #S mesh vertex ids, increasing
+  core::PointMatrix position;  ///< #S by 3 [m]
+  core::PointMatrix normal;    ///< #S by 3 outward unit normals (area-weighted mean of the incident faces)
 
   int size() const { return static_cast<int>(vertex.size()); }
   /// Index (into vertex/position) of the surface node nearest x, and its distance [m].
@@ -24,10 +24,10 @@ struct SurfaceNodes {
 /// Surface nodes of `mesh` (boundary faces must be oriented outward, as core::TetMesh guarantees).
 SurfaceNodes surface_nodes(const core::TetMesh& mesh);
 
-/// A traction patch on a fixed cloud: the boundary faces whose centroid lies within `radius` of the contact node
-/// and whose outward normal points to the same side as the node's (normal . n_contact > 0), the same side rule as
-/// the case's load patch (core/geometry.cpp). The patch's edge follows the faces, so it is ragged at the node
-/// spacing; the traction is force / area, so the total force is exact.
+/// A traction patch on a fixed cloud: the boundary faces whose centroid lies within `radius` of the contact
+/// node and whose outward normal points to the same side as the node's (normal . n_contact > 0), the same
+/// side rule as the case's load patch (core/geometry.cpp). The patch's edge follows the faces, so it is
+/// ragged at the node spacing; the traction is force / area, so the total force is exact.
 struct LoadPatch {
   std::vector<char> faces;  ///< #boundary faces mask (EfgProblem::loaded_faces)
   double area = 0.0;        ///< [m^2]

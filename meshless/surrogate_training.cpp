@@ -33,8 +33,8 @@ double resident_bytes() {
 
 std::string describe(const SurfaceNodes& surface, const PatchLoad& load) {
   const Eigen::Vector3d x = surface.position.row(load.contact).transpose() * 1e3;
-  return fmt::format("contact node ({:.4g}, {:.4g}, {:.4g}) mm, force ({:.4g}, {:.4g}, {:.4g}) N", x.x(), x.y(), x.z(),
-                     load.force.x(), load.force.y(), load.force.z());
+  return fmt::format("contact node ({:.4g}, {:.4g}, {:.4g}) mm, force ({:.4g}, {:.4g}, {:.4g}) N", x.x(),
+                     x.y(), x.z(), load.force.x(), load.force.y(), load.force.z());
 }
 
 /// Solve one load on a set-up model: restart from rest under the patch traction, step to the response step.
@@ -48,7 +48,8 @@ SolvedLoad solve_one(EfgModel& model, const SurfaceNodes& surface, const PatchLo
   model.restart(patch.faces, [traction](const Eigen::Vector3d&) { return traction; });
   SolvedLoad out;
   out.patch_area = patch.area;
-  for (int step = 1; step <= options.response_step; ++step) out.newton_iterations += model.solve_step(step).newton_iterations;
+  for (int step = 1; step <= options.response_step; ++step)
+    out.newton_iterations += model.solve_step(step).newton_iterations;
   out.displacement = model.displacements_at(surface.position);  // eq. 7, not the nodal parameters
   out.seconds = seconds_since(t0);
   return out;
@@ -62,10 +63,11 @@ int response_step(const EfgProblem& problem, bool at_end) {
   if (at_end) return n;
   for (int step = 1; step <= n; ++step)
     if (problem.load_scale(problem.step_times[step - 1]) >= 1.0 - 1e-12) return step;
-  throw std::invalid_argument(fmt::format(
-      "the force is still ramping at the last step (t = {:g} s, {:.3g} of full load); expected load.ramp_time <= "
-      "time.total for the end-of-ramp response",
-      problem.step_times.back(), problem.load_scale(problem.step_times.back())));
+  throw std::invalid_argument(
+      fmt::format("the force is still ramping at the last step (t = {:g} s, {:.3g} of full load); expected "
+                  "load.ramp_time <= "
+                  "time.total for the end-of-ramp response",
+                  problem.step_times.back(), problem.load_scale(problem.step_times.back())));
 }
 
 std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOptions& efg_options,
@@ -93,15 +95,16 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
     ++done;
     const SolvedLoad& r = results[i];
     const Eigen::Vector3d u = r.displacement.row(loads[i].contact).transpose();
-    progress(fmt::format("solve {}/{}: {}: {} Newton iterations, |u| at the contact node {:.4g} mm ({:.1f} s)", done,
-                         loads.size(), describe(surface, loads[i]), r.newton_iterations, u.norm() * 1e3, r.seconds));
+    progress(fmt::format(
+        "solve {}/{}: {}: {} Newton iterations, |u| at the contact node {:.4g} mm ({:.1f} s)", done,
+        loads.size(), describe(surface, loads[i]), r.newton_iterations, u.norm() * 1e3, r.seconds));
   };
   auto rethrow_with_context = [&](std::size_t i, const std::exception_ptr& e) {
     try {
       std::rethrow_exception(e);
     } catch (const std::exception& ex) {
-      throw std::runtime_error(fmt::format("the full meshless model failed for {}: {}", describe(surface, loads[i]),
-                                           ex.what()));
+      throw std::runtime_error(
+          fmt::format("the full meshless model failed for {}: {}", describe(surface, loads[i]), ex.what()));
     }
   };
 
@@ -120,7 +123,8 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
   rep.model_bytes = 1.25 * std::max(0.0, resident_bytes() - baseline);  // + transient solver work space
   const int hardware = std::max(1u, std::thread::hardware_concurrency());
   const int cap = options.max_workers > 0 ? options.max_workers : hardware;
-  const int by_memory = rep.model_bytes > 0.0 ? static_cast<int>(options.memory_budget_bytes / rep.model_bytes) : cap;
+  const int by_memory =
+      rep.model_bytes > 0.0 ? static_cast<int>(options.memory_budget_bytes / rep.model_bytes) : cap;
   rep.workers = std::max(1, std::min({cap, by_memory, static_cast<int>(loads.size()) - 1}));
   const int threads_per_worker = std::max(1, hardware / rep.workers);
 
@@ -189,7 +193,8 @@ PatchComparison compare_load_patches(const EfgProblem& problem, const EfgOptions
       ++out.imprinted_faces;
     }
   out.imprinted_area = mesh.tagged_area(core::FaceTag::load);
-  if (out.imprinted_faces == 0) throw std::invalid_argument("compare_load_patches: the cloud has no load-tagged face");
+  if (out.imprinted_faces == 0)
+    throw std::invalid_argument("compare_load_patches: the cloud has no load-tagged face");
   const Eigen::Vector3d traction = load.force / out.imprinted_area;
   model.restart(imprinted, [traction](const Eigen::Vector3d&) { return traction; });
   for (int step = 1; step <= options.response_step; ++step) model.solve_step(step);
@@ -198,7 +203,8 @@ PatchComparison compare_load_patches(const EfgProblem& problem, const EfgOptions
   out.patch = patch.displacement;
   out.patch_area = patch.patch_area;
   const Eigen::Vector3d x = surface.position.row(load.contact).transpose();
-  out.patch_faces = load_patch(mesh, x, surface.normal.row(load.contact).transpose(), options.patch_radius).num_faces;
+  out.patch_faces =
+      load_patch(mesh, x, surface.normal.row(load.contact).transpose(), options.patch_radius).num_faces;
   return out;
 }
 

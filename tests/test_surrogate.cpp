@@ -1,7 +1,7 @@
-// The force -> displacement surrogate (paper §3, eqs. 25-28): the fits recover known fields, Ceres agrees with the
-// closed-form least squares, restarting the full model equals a fresh one, the query superposes the axes and flags
-// what it was not trained on, and the file refuses what it cannot trust. The comparison with the full model at
-// untrained forces is tests/test_surrogate_box.cpp (label long).
+// The force -> displacement surrogate (paper §3, eqs. 25-28): the fits recover known fields, Ceres agrees
+// with the closed-form least squares, restarting the full model equals a fresh one, the query superposes the
+// axes and flags what it was not trained on, and the file refuses what it cannot trust. The comparison with
+// the full model at untrained forces is tests/test_surrogate_box.cpp (label long).
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -13,13 +13,13 @@
 #include <random>
 
 #include "meshless/box_mesh.hpp"
-#include "meshless/surrogate_fit.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/surrogate.hpp"
 #include "meshless/surrogate_box_case.hpp"
 #include "meshless/surrogate_builder.hpp"
 #include "meshless/surrogate_cost_functions.hpp"
 #include "meshless/surrogate_file.hpp"
+#include "meshless/surrogate_fit.hpp"
 
 namespace meshless {
 namespace {
@@ -46,13 +46,14 @@ TEST(SurrogateBasis, SubsetsMatchTheSmallerBasisAndTheFrameIsOrthonormal) {
         small.evaluate(x, vs.data());
         for (int k = 0; k < small.size(); ++k) EXPECT_EQ(vf[cols[k]], vs[k]);
       }
-  // The contact terms of order 1 are the regularised Kelvin solution: s (delta_ij + e_i e_j) is in their span.
+  // The contact terms of order 1 are the regularised Kelvin solution: s (delta_ij + e_i e_j) is in their
+  // span.
   const SpatialBasis kelvin(0, 0, 1, 0.1);
   const Eigen::Vector3d x(0.3, -0.2, 0.05);
   std::vector<double> v(kelvin.size());
   kelvin.evaluate(x, v.data());
   const double rho = std::sqrt(x.squaredNorm() + 0.01);
-  EXPECT_DOUBLE_EQ(v[1], 0.1 / rho);                         // s
+  EXPECT_DOUBLE_EQ(v[1], 0.1 / rho);                                    // s
   EXPECT_DOUBLE_EQ(v[1 + 4], 0.1 / rho * x.x() * x.x() / (rho * rho));  // s e_xi^2
   const SurfaceFrame f = SurfaceFrame::at({1, 2, 3}, {0.3, -0.2, 0.9}, 2.0, 0.5);
   EXPECT_NEAR(f.tangent1.dot(f.tangent2), 0.0, 1e-15);
@@ -72,7 +73,10 @@ TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationP
   surface.normal << 0, 0, 1;
   data.contact = 0;
   data.levels = {-4, -3, -2, -1, 1, 2, 3, 4};
-  auto u = [](double f) { const double s = f / 4.0; return 1e-3 * (0.8 * s - 0.3 * s * s + 0.05 * s * s * s); };
+  auto u = [](double f) {
+    const double s = f / 4.0;
+    return 1e-3 * (0.8 * s - 0.3 * s * s + 0.05 * s * s * s);
+  };
   for (int j = 0; j < 3; ++j)
     for (double f : data.levels) {
       core::PointMatrix d = core::PointMatrix::Zero(1, 3);
@@ -84,8 +88,8 @@ TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationP
   options.max_normal_order = 0;
   options.max_contact_order = 0;
   options.cv_folds = 4;
-  // One surface node cannot be cross-validated spatially: fit the contact node alone through the public path by
-  // giving it enough copies of itself.
+  // One surface node cannot be cross-validated spatially: fit the contact node alone through the public path
+  // by giving it enough copies of itself.
   surface.vertex.assign(12, 0);
   surface.position = core::PointMatrix::Zero(12, 3);
   for (int i = 0; i < 12; ++i) surface.position.row(i) << 1e-3 * (i % 4), 1e-3 * (i / 4), 0.0;
@@ -121,7 +125,8 @@ TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheClosedFormLeastSqua
   for (int i = 0; i < n; ++i) local.row(i) << uniform(rng), uniform(rng), uniform(rng);
   const Eigen::MatrixXd psi = basis.evaluate(local);
   Eigen::VectorXd target(n);
-  for (int i = 0; i < n; ++i) target[i] = std::sin(2 * local(i, 0)) * std::exp(local(i, 1)) + 0.1 * uniform(rng);
+  for (int i = 0; i < n; ++i)
+    target[i] = std::sin(2 * local(i, 0)) * std::exp(local(i, 1)) + 0.1 * uniform(rng);
   ceres::Problem problem;
   std::vector<double> c(basis.size(), 0.0);
   for (int i = 0; i < n; ++i) {
@@ -149,7 +154,8 @@ TEST(SurrogateLoadPatch, SelectsTheFacesAroundTheContactOnItsSide) {
   EXPECT_EQ(surface.size(), 9 * 9 * 5 - 7 * 7 * 3);  // all nodes minus the interior ones
   const int c = surface.nearest({20 * kMm, 20 * kMm, 20 * kMm});
   EXPECT_TRUE(surface.normal.row(c).isApprox(Eigen::RowVector3d(0, 0, 1), 1e-12));
-  const LoadPatch p = load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 6 * kMm);
+  const LoadPatch p =
+      load_patch(mesh, surface.position.row(c).transpose(), Eigen::Vector3d::UnitZ(), 6 * kMm);
   // On the 5 mm grid, two triangles per square: the 8 triangles of the 4 squares around the centre have their
   // centroids 2.4-4.7 mm away, the next ring's are at least 6.9 mm away.
   EXPECT_EQ(p.num_faces, 8);
@@ -176,9 +182,9 @@ TEST(SurrogateTraining, RestartingTheModelEqualsAFreshModel) {
   EXPECT_LT((both[1].displacement - fresh[0].displacement).cwiseAbs().maxCoeff(), 1e-7 * scale);
 }
 
-/// A surrogate fitted to an analytic field on the box's surface nodes (no full solves: fast): for the force axis j
-/// and level sigma, u(X) = (sigma / F) g_j(X) + (sigma / F)^2 h(X), where g_j is the regularised point-force (Kelvin)
-/// field along j and h a smooth quadratic field.
+/// A surrogate fitted to an analytic field on the box's surface nodes (no full solves: fast): for the force
+/// axis j and level sigma, u(X) = (sigma / F) g_j(X) + (sigma / F)^2 h(X), where g_j is the regularised
+/// point-force (Kelvin) field along j and h a smooth quadratic field.
 const SurrogateData& synthetic_surrogate() {
   static const SurrogateData data = [] {
     const core::TetMesh mesh = box_problem().mesh;
@@ -195,7 +201,8 @@ const SurrogateData& synthetic_surrogate() {
         for (int i = 0; i < surface.size(); ++i) {
           const Eigen::Vector3d d = surface.position.row(i).transpose() - xc;
           const double rho = std::sqrt(d.squaredNorm() + spec.contact_length * spec.contact_length);
-          const Eigen::Vector3d g = 1e-3 * spec.contact_length / rho * (Eigen::Vector3d::Unit(j) + d * d[j] / (rho * rho));
+          const Eigen::Vector3d g =
+              1e-3 * spec.contact_length / rho * (Eigen::Vector3d::Unit(j) + d * d[j] / (rho * rho));
           const Eigen::Vector3d h = 1e-2 * Eigen::Vector3d(d.x() * d.z(), d.y() * d.y(), d.x());
           u.row(i) = (s * g + s * s * h).transpose();
         }
@@ -218,9 +225,9 @@ const SurrogateData& synthetic_surrogate() {
 }
 
 TEST(SurrogateFit, AnAnalyticFieldInTheBasisIsRecovered) {
-  // The synthetic field lies in the span of force order 2, contact order 1 and a polynomial of degree 2: the fit
-  // must reproduce it to round-off, and cross-validation must see that. At the contact node h vanishes, so eqs.
-  // 25-27 need order 1 only while the field needs 2: each order has its own cross-validation.
+  // The synthetic field lies in the span of force order 2, contact order 1 and a polynomial of degree 2: the
+  // fit must reproduce it to round-off, and cross-validation must see that. At the contact node h vanishes,
+  // so eqs. 25-27 need order 1 only while the field needs 2: each order has its own cross-validation.
   const SurrogateData& d = synthetic_surrogate();
   for (int j = 0; j < 3; ++j) {
     const AxisFit& a = d.contacts[0].axis[j];
@@ -252,12 +259,14 @@ TEST(SurrogateQuery, SuperposesTheAxesAndFlagsWhatWasNotTrained) {
   const SurrogateResponse rx = s.query(x, {f.x(), 0, 0}, &ux), ry = s.query(x, {0, f.y(), 0}, &uy),
                           rz = s.query(x, {0, 0, f.z()}, &uz);
   EXPECT_LT((u - ux - uy - uz).cwiseAbs().maxCoeff(), 1e-15);  // the paper's superposition of the components
-  EXPECT_TRUE(r.contact_displacement.isApprox(rx.contact_displacement + ry.contact_displacement +
-                                                  rz.contact_displacement, 1e-14));
+  EXPECT_TRUE(r.contact_displacement.isApprox(
+      rx.contact_displacement + ry.contact_displacement + rz.contact_displacement, 1e-14));
   EXPECT_NEAR(r.max_surface_displacement, u.rowwise().norm().maxCoeff(), 1e-18);
   EXPECT_LT(r.contact_displacement.z(), 0.0);  // pressed in
-  // Eqs. 25-27 at the contact node: the analytic field there is s g_j(X_c) + s^2 h(X_c) = (sigma / F) 1e-3 e_j.
-  EXPECT_TRUE(r.contact_displacement.isApprox(1e-3 * f / s.data().max_force, 1e-10)) << r.contact_displacement;
+  // Eqs. 25-27 at the contact node: the analytic field there is s g_j(X_c) + s^2 h(X_c) = (sigma / F) 1e-3
+  // e_j.
+  EXPECT_TRUE(r.contact_displacement.isApprox(1e-3 * f / s.data().max_force, 1e-10))
+      << r.contact_displacement;
 
   // Outside the trained range: clamped to it and flagged, never extrapolated.
   core::PointMatrix clamped, edge;
@@ -285,7 +294,9 @@ class SurrogateFile : public ::testing::Test {
     std::ifstream in(p, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   }
-  static void write(const std::string& p, const std::string& text) { std::ofstream(p, std::ios::binary) << text; }
+  static void write(const std::string& p, const std::string& text) {
+    std::ofstream(p, std::ios::binary) << text;
+  }
   static std::string error_of(const std::string& p, const std::optional<std::string>& hash = std::nullopt) {
     try {
       read_surrogate(p, hash);
@@ -303,7 +314,8 @@ TEST_F(SurrogateFile, RoundTripGivesTheSameAnswers) {
   const Surrogate a(synthetic_surrogate()), b(back);
   const Eigen::Vector3d x = a.data().surface_position.row(a.data().contacts[0].contact).transpose();
   core::PointMatrix ua, ub;
-  const SurrogateResponse ra = a.query(x, {0.01, 0.02, -0.04}, &ua), rb = b.query(x, {0.01, 0.02, -0.04}, &ub);
+  const SurrogateResponse ra = a.query(x, {0.01, 0.02, -0.04}, &ua),
+                          rb = b.query(x, {0.01, 0.02, -0.04}, &ub);
   EXPECT_EQ(ua, ub);  // the JSON numbers round-trip exactly
   EXPECT_EQ(ra.contact_displacement, rb.contact_displacement);
   for (const auto& entry : std::filesystem::directory_iterator(std::filesystem::path(p).parent_path()))
