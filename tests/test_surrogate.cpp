@@ -2,9 +2,12 @@
 // with the closed-form least squares, restarting the full model equals a fresh one, the query superposes the
 // axes and flags what it was not trained on, and the file refuses what it cannot trust. The comparison with
 // the full model at untrained forces is tests/test_surrogate_box.cpp (label long).
+#include <fmt/format.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -357,6 +360,132 @@ TEST_F(SurrogateFile, MissingTruncatedEditedOrMismatchedFilesAreRefusedWithTheRe
   EXPECT_NE(error_of(mm).find("units"), std::string::npos) << error_of(mm);
 
   EXPECT_NO_THROW(read_surrogate(good, std::string("0123456789abcdef")));
+}
+
+// The command line on a surrogate file: `tissue probe` answers good lines, reports malformed ones and goes
+// on, flags forces outside the trained range, replays a trace with its latency report and per-sample CSV, and
+// refuses a missing, truncated or mismatched file or a malformed trace with the reason; `--help` on both.
+class ProbeCommand : public SurrogateFile {
+ protected:
+  struct Run {
+    int exit_code;
+    std::string output;  // stdout + stderr
+  };
+  static Run run(const std::string& args, const std::string& stdin_text = "") {
+    // One stdin file per test process: ctest runs the tests of this suite concurrently.
+    const std::string input =
+        std::filesystem::temp_directory_path() / "tissue_test_surrogate" /
+        fmt::format("stdin_{}_{}.txt", ::testing::UnitTest::GetInstance()->current_test_info()->name(),
+                    ::getpid());
+    write(input, stdin_text);
+    const std::string command = std::string(TISSUE_BINARY) + " " + args + " < " + input + " 2>&1";
+    FILE* pipe = popen(command.c_str(), "r");
+    EXPECT_NE(pipe, nullptr);
+    std::string output;
+    char buffer[4096];
+    while (fgets(buffer, sizeof buffer, pipe)) output += buffer;
+    const int status = pclose(pipe);
+    return {WEXITSTATUS(status), output};
+  }
+  std::string good_file() {
+    const std::string p = path("probe.surrogate.json");
+    write_surrogate(p, synthetic_surrogate());
+    return p;
+  }
+  /// The synthetic surrogate's contact node [mm], as a probe line's first three numbers.
+  static std::string contact_mm() {
+    const SurrogateData& d = synthetic_surrogate();
+    const Eigen::Vector3d x = d.surface_position.row(d.contacts[0].contact).transpose() / kMm;
+    return fmt::format("{:.6f} {:.6f} {:.6f}", x.x(), x.y(), x.z());
+  }
+  static int count(const std::string& text, const std::string& what) {
+    int n = 0;
+    for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++n;
+    return n;
+  }
+};
+
+TEST_F(ProbeCommand, HelpDescribesBothCommands) {
+  const Run probe = run("probe --help"), fit = run("fit --help");
+  EXPECT_EQ(probe.exit_code, 0) << probe.output;
+  EXPECT_NE(probe.output.find("--trace"), std::string::npos) << probe.output;
+  EXPECT_NE(probe.output.find("--rate"), std::string::npos) << probe.output;
+  EXPECT_EQ(fit.exit_code, 0) << fit.output;
+  EXPECT_NE(fit.output.find("--out"), std::string::npos) << fit.output;
+  const Run no_out = run("fit " + std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_surrogate.json");
+  EXPECT_NE(no_out.exit_code, 0);
+  EXPECT_NE(no_out.output.find("--out"), std::string::npos) << no_out.output;
+}
+
+TEST_F(ProbeCommand, InteractiveAnswersReportsMalformedLinesAndFlagsUntrainedForces) {
+  const std::string file = good_file();
+  const std::string lines = "# a comment\n" + contact_mm() + " 0 0 -0.03\n" + "1 2 three 0 0 0\n" +
+                            contact_mm() + " 0 0 -0.2\n" + "1 2 3\n" + contact_mm() + ", 0.01, 0, 0\n";
+  const Run r = run("probe " + file, lines);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(count(r.output, "contact node "), 3) << r.output;  // the three good lines, the loop went on
+  EXPECT_NE(r.output.find("error: line 3: expected six numbers"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("error: line 5: expected six numbers"), std::string::npos) << r.output;
+  EXPECT_EQ(count(r.output, "force outside the trained range"), 1) << r.output;
+  EXPECT_NE(r.output.find("2 malformed line(s) skipped"), std::string::npos) << r.output;
+  // The first answer: eqs. 25-27 at the contact node give (sigma / F) 1 mm along the force (the analytic
+  // field of synthetic_surrogate()), so -0.03 N of 0.05 N is -0.6 mm along z.
+  EXPECT_NE(r.output.find(", -0.60000) mm, |u| = 0.60000 mm"), std::string::npos) << r.output;
+}
+
+TEST_F(ProbeCommand, ReplayReportsLatencyAndWritesOneRowPerSample) {
+  const std::string file = good_file(), trace = path("trace.csv"), out = path("trace.probe.csv");
+  std::string rows = "t,x,y,z,fx,fy,fz\n";
+  const int n = 50;
+  for (int i = 0; i < n; ++i) {
+    const double f = i == n - 1 ? -0.08 : -0.04 * i / n;  // the last one beyond the trained 0.05 N
+    rows += fmt::format("{},{},0,0,{}\n", 1e-3 * i, contact_mm(), f);
+  }
+  std::replace(rows.begin(), rows.end(), ' ', ',');
+  write(trace, rows);
+  std::filesystem::remove(out);
+  const Run r = run("probe " + file + " --trace " + trace + " --rate 1000 --out " + out);
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find(fmt::format("replayed {} samples at 1000 Hz", n)), std::string::npos) << r.output;
+  for (const char* field : {"latency p50", "p99", "max", "missed deadlines:"})
+    EXPECT_NE(r.output.find(field), std::string::npos) << field << "\n" << r.output;
+  EXPECT_NE(r.output.find("flagged: 1 sample(s) with a force outside"), std::string::npos) << r.output;
+  const std::string csv = read(out);
+  EXPECT_EQ(count(csv, "\n"), n + 1) << csv.substr(0, 400);  // header + one row per sample
+  EXPECT_EQ(csv.rfind("sample,t_s,x_mm", 0), 0u);
+}
+
+TEST_F(ProbeCommand, BadFilesAndTracesAreRefusedWithTheReason) {
+  const std::string file = good_file();
+  const Run missing = run("probe " + path("nowhere.surrogate.json"), "");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_NE(missing.output.find("cannot open the surrogate file"), std::string::npos) << missing.output;
+
+  const std::string truncated = path("probe_truncated.json");
+  const std::string text = read(file);
+  write(truncated, text.substr(0, text.size() / 3));
+  const Run cut = run("probe " + truncated, "");
+  EXPECT_NE(cut.exit_code, 0);
+  EXPECT_NE(cut.output.find("truncated"), std::string::npos) << cut.output;
+
+  // Fitted on the box, checked against the shipped lung case: another case's hash.
+  const Run other =
+      run("probe " + file + " --case " + std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_surrogate.json", "");
+  EXPECT_NE(other.exit_code, 0);
+  EXPECT_NE(other.output.find("the case changed since the fit"), std::string::npos) << other.output;
+
+  const std::string bad_trace = path("bad_trace.csv");
+  write(bad_trace, "t,x,y,z,fx,fy,fz\n0,1,2,3,0,0,0\n0.001,1,2,3,0,zero,0\n");
+  const Run malformed = run("probe " + file + " --trace " + bad_trace, "");
+  EXPECT_NE(malformed.exit_code, 0);
+  EXPECT_NE(malformed.output.find("bad_trace.csv:3: expected seven numbers"), std::string::npos)
+      << malformed.output;
+  const Run no_trace = run("probe " + file + " --trace " + path("no_trace.csv"), "");
+  EXPECT_NE(no_trace.exit_code, 0);
+  EXPECT_NE(no_trace.output.find("cannot open the trace"), std::string::npos) << no_trace.output;
+  const Run bad_rate = run("probe " + file + " --trace " + bad_trace + " --rate 0", "");
+  EXPECT_NE(bad_rate.exit_code, 0);
+  EXPECT_NE(bad_rate.output.find("--rate"), std::string::npos) << bad_rate.output;
 }
 
 }  // namespace
