@@ -19,7 +19,9 @@
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <memory>
+#include <string>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
@@ -59,8 +61,12 @@ const meshless::Surrogate* shipped_surrogate() {
   return s.get();
 }
 
+/// Mean query time [s] of each surrogate, kept by its query benchmark for the full solve's ratio (the query
+/// benchmarks are registered, so run, before the full solves).
+std::map<std::string, double> mean_query_seconds;
+
 /// Queries cycling over forces spread inside the trained range; per-query latencies as counters.
-void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
+void time_queries(benchmark::State& state, const meshless::Surrogate& s, const std::string& name) {
   const Eigen::Vector3d x = s.data().surface_position.row(s.data().contacts[0].contact).transpose();
   const double f = s.data().max_force;
   std::vector<Eigen::Vector3d> forces;
@@ -80,6 +86,9 @@ void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
       latency.push_back(
           std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count());
   }
+  double sum = 0.0;
+  for (double t : latency) sum += t;
+  mean_query_seconds[name] = 1e-6 * sum / std::max<std::size_t>(1, latency.size());
   std::sort(latency.begin(), latency.end());
   auto at = [&](double p) {
     return latency[std::min(latency.size() - 1, static_cast<std::size_t>(p * latency.size()))];
@@ -92,7 +101,7 @@ void time_queries(benchmark::State& state, const meshless::Surrogate& s) {
 
 /// One patch load on a set-up model, to the response step: what a query replaces.
 void time_full_solve(benchmark::State& state, const meshless::EfgProblem& problem,
-                     const meshless::SurrogateData& d) {
+                     const meshless::SurrogateData& d, const std::string& name) {
   const meshless::SurfaceNodes surface = meshless::surface_nodes(problem.mesh);
   meshless::PatchSolveOptions options;
   options.patch_radius = d.patch_radius;
@@ -105,16 +114,21 @@ void time_full_solve(benchmark::State& state, const meshless::EfgProblem& proble
     benchmark::DoNotOptimize(r);
     state.counters["solve_s"] = r[0].seconds;  // without the model's set-up
     state.counters["newton_iterations"] = r[0].newton_iterations;
+    // What one query saves, measured in this run: the full solve over the mean query time.
+    if (mean_query_seconds.count(name))
+      state.counters["solve_over_query"] = r[0].seconds / mean_query_seconds[name];
   }
   state.counters["nodes"] = problem.mesh.num_vertices();
   state.counters["surface_nodes"] = surface.size();
 }
 
 void BM_SurrogateQuery_box(benchmark::State& state) {
-  time_queries(state, meshless::Surrogate(box_surrogate()));
+  time_queries(state, meshless::Surrogate(box_surrogate()), "box");
 }
 
-void BM_FullSolve_box(benchmark::State& state) { time_full_solve(state, box_problem(), box_surrogate()); }
+void BM_FullSolve_box(benchmark::State& state) {
+  time_full_solve(state, box_problem(), box_surrogate(), "box");
+}
 
 void BM_SurrogateQuery_shipped(benchmark::State& state) {
   const meshless::Surrogate* s = shipped_surrogate();
@@ -124,7 +138,7 @@ void BM_SurrogateQuery_shipped(benchmark::State& state) {
         "results/surrogate/lung_small.surrogate.json` or set TISSUE_SURROGATE)");
     return;
   }
-  time_queries(state, *s);
+  time_queries(state, *s, "shipped");
 }
 
 void BM_FullSolve_shipped(benchmark::State& state) {
@@ -141,7 +155,7 @@ void BM_FullSolve_shipped(benchmark::State& state) {
   core::GeometryOptions g;
   g.build_fem_mesh = false;
   const core::Geometry geometry = core::build_geometry(c, g);
-  time_full_solve(state, meshless::problem_from_case(c, geometry), s->data());
+  time_full_solve(state, meshless::problem_from_case(c, geometry), s->data(), "shipped");
 }
 
 void BM_SurrogateTraining_box(benchmark::State& state) {
