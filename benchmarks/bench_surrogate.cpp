@@ -3,7 +3,7 @@
 //  and every
 //    surface node's from eq. 28), with the per-query latency distribution (p50, p99, max) as counters; the
 //    goal is p99 <= 50 us, 20x inside a 1 kHz haptic frame. `shipped` is the surrogate file named by the
-//    environment variable TISSUE_SURROGATE (default results/surrogate/lung_small.surrogate.json), skipped
+//    environment variable TISSUE_SURROGATE (default results/surrogate/lung_surrogate.surrogate.json), skipped
 //    when absent.
 //  * BM_FullSolve/box and /shipped: what a query replaces, measured in the same run: the full meshless model
 //  solving
@@ -54,7 +54,7 @@ std::string env_or(const char* name, const std::string& fallback) {
 /// The shipped surrogate, or nullptr when its file is absent.
 const meshless::Surrogate* shipped_surrogate() {
   static std::unique_ptr<meshless::Surrogate> s = []() -> std::unique_ptr<meshless::Surrogate> {
-    const std::string path = env_or("TISSUE_SURROGATE", "results/surrogate/lung_small.surrogate.json");
+    const std::string path = env_or("TISSUE_SURROGATE", "results/surrogate/lung_surrogate.surrogate.json");
     if (!std::filesystem::exists(path)) return nullptr;
     return std::make_unique<meshless::Surrogate>(meshless::read_surrogate(path));
   }();
@@ -135,7 +135,7 @@ void BM_SurrogateQuery_shipped(benchmark::State& state) {
   if (!s) {
     state.SkipWithError(
         "no shipped surrogate file (run `tissue fit configs/lung_surrogate.json --out "
-        "results/surrogate/lung_small.surrogate.json` or set TISSUE_SURROGATE)");
+        "results/surrogate/lung_surrogate.surrogate.json` or set TISSUE_SURROGATE)");
     return;
   }
   time_queries(state, *s, "shipped");

@@ -18,7 +18,7 @@ import math
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--point", nargs=3, type=float, default=[-78.0, 0.0, 20.0], help="contact point [mm]")
-    parser.add_argument("--max-force", type=float, default=0.6, help="the surrogate's trained range [N]")
+    parser.add_argument("--max-force", type=float, default=0.4, help="the surrogate's trained range [N]")
     parser.add_argument("--rate", type=float, default=1000.0, help="samples per second")
     parser.add_argument("--out", default="configs/probe_trace.csv")
     a = parser.parse_args()
