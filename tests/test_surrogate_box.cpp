@@ -39,8 +39,9 @@ TEST(SurrogateBox, HeldOutForcesMatchTheFullModelWithinTwoPercent) {
               << " mm = " << 100 * e.relative << " % of the contact-node displacement "
               << e.contact_displacement * 1e3 << " mm; contact-node error " << e.contact_error * 1e3
               << " mm\n";
-    // The requirement is 2 %; 0.52 % was measured (docs/SURROGATE.md §6), so a lost contact term shows here.
-    EXPECT_LE(e.relative, 0.01);
+    // The requirement is 2 %; 0.52 % was measured at both forces (docs/SURROGATE.md §6), so a lost contact
+    // term or force order shows here.
+    EXPECT_LE(e.relative, 0.0075);
     // Eqs. 25-27 at the contact node: exact along one axis, the superposition of the axes costs 0.2 %
     // obliquely.
     EXPECT_LE(e.contact_error, 0.005 * e.contact_displacement);
