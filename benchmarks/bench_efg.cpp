@@ -1,41 +1,76 @@
 // EFG model cost on box clouds of ~2k, 8k and 32k nodes (13^3, 20^3, 32^3; spacing 5 mm, d_max = 2, k = 6,
 // quadrature order 2 on 6 tets per grid cell): one full assembly of eqs. 20-24 (material update, residual and
-// tangent) and one linear solve: the automatic choice (UMFPACK factorisation + back substitution when its
-// estimated peak memory fits half the RAM, Jacobi-BiCGSTAB otherwise: the 32k cloud), and Jacobi-BiCGSTAB
-// at the two smaller sizes for comparison (docs/PERFORMANCE.md).
+// tangent) and one elastic load step with each linear solver (docs/PERFORMANCE.md, docs/MESHLESS.md §2):
+//  * BM_EfgSolve: the automatic choice (UMFPACK when its estimated LU fits the available memory, else the
+//    AMG-preconditioned Krylov solve);
+//  * BM_EfgSolveAmgKrylov / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver forced, for the ratios
+//    within one run and the iterations against the cloud size;
+//  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::amg_options
+//    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
-
+#include <deal.II/base/mpi.h>
 #include <sys/resource.h>
 
 #include <memory>
+#include <string>
+#include <tuple>
 
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
 namespace {
 
-/// Peak resident memory of this process so far [GB]. The sizes run in increasing order, so after a 32k
-/// benchmark this is the peak of the 32k model (set-up, assembly and, for the solve, the factorisation).
+using meshless::LinearSolverKind;
+
+/// Peak resident memory of this process so far [GB]. The sizes run in increasing order within each benchmark
+/// family, so after a 32k benchmark this is the peak of the 32k model (set-up, assembly and the solve).
 double peak_memory_gb() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<double>(usage.ru_maxrss) * 1024.0 / 1e9;  // ru_maxrss is in KiB on Linux
 }
 
-/// One set-up model per size and solver, shared by the benchmarks (set-up of the 32k cloud takes tens of
-/// seconds). Only one is kept alive at a time: the 32k model alone holds several GB.
-meshless::EfgModel& model_for(int side, meshless::LinearSolverKind solver = meshless::LinearSolverKind::automatic) {
-  static std::pair<int, meshless::LinearSolverKind> key{0, solver};
+/// A variant of the sheared box and of the solver options.
+struct Variant {
+  LinearSolverKind solver = LinearSolverKind::automatic;
+  std::string amg_options;  // empty: EfgOptions' default
+  bool variationally_consistent = true;
+  double d_max = 2.0;
+  double penalty_factor = 1e3;
+  bool operator!=(const Variant& o) const {
+    return std::tie(solver, amg_options, variationally_consistent, d_max, penalty_factor) !=
+           std::tie(o.solver, o.amg_options, o.variationally_consistent, o.d_max, o.penalty_factor);
+  }
+};
+
+/// The model shared by the benchmarks. main() destroys it before MPI and PETSc are finalised: its solver holds
+/// PETSc objects.
+std::unique_ptr<meshless::EfgModel>& cached_model() {
   static std::unique_ptr<meshless::EfgModel> model;
-  if (!model || key != std::make_pair(side, solver)) {
+  return model;
+}
+
+/// One set-up model per size and variant, shared by the benchmarks (set-up of the 32k cloud takes tens of
+/// seconds). Only one is kept alive at a time: the 32k model alone holds several GB.
+meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
+  static int key_side = 0;
+  static Variant key;
+  std::unique_ptr<meshless::EfgModel>& model = cached_model();
+  if (!model || key_side != side || key != variant) {
     model.reset();
     meshless::EfgOptions options;
-    options.linear_solver = solver;
-    model = std::make_unique<meshless::EfgModel>(meshless::sheared_box_problem(side), options);
+    options.linear_solver = variant.solver;
+    options.variationally_consistent = variant.variationally_consistent;
+    if (!variant.amg_options.empty()) options.amg_options = variant.amg_options;
+    meshless::EfgProblem problem = meshless::sheared_box_problem(side);
+    problem.support.d_max = variant.d_max;
+    problem.penalty_factor = variant.penalty_factor;
+    model = std::make_unique<meshless::EfgModel>(std::move(problem), options);
     model->setup_system();
-    key = {side, solver};
+    key_side = side;
+    key = variant;
   }
   return *model;
 }
@@ -59,10 +94,10 @@ void BM_EfgAssembly(benchmark::State& state) {
   state.counters["peak_rss_GB"] = peak_memory_gb();
 }
 
-/// One elastic load step (meshless::EfgModel::solve_step): Newton with one linear solve (UMFPACK factorisation
-/// + back substitution, or Jacobi-BiCGSTAB) and two assemblies; the solve alone is the `solve_s` counter.
-void time_solve(benchmark::State& state, meshless::LinearSolverKind solver) {
-  meshless::EfgModel& model = model_for(static_cast<int>(state.range(0)), solver);
+/// One elastic load step (meshless::EfgModel::solve_step): Newton with one linear solve and two assemblies;
+/// the linear solve alone (factorisation or multigrid set-up included) is the `solve_s` counter.
+void time_solve(benchmark::State& state, const Variant& variant) {
+  meshless::EfgModel& model = model_for(static_cast<int>(state.range(0)), variant);
   meshless::StepRecord step;
   for (auto _ : state) step = model.solve_step(1);
   const meshless::EfgStatistics& st = model.statistics();
@@ -70,21 +105,70 @@ void time_solve(benchmark::State& state, meshless::LinearSolverKind solver) {
   state.counters["solve_s"] = step.solve_seconds;
   state.counters["assembly_s"] = step.assembly_seconds;
   state.counters["newton_iterations"] = step.newton_iterations;
-  state.counters["bicgstab_iterations"] = step.linear_iterations;
+  state.counters["krylov_iterations"] = step.linear_iterations;
   state.counters["umfpack_peak_GB"] = st.direct_peak_memory_estimate / 1e9;
-  state.counters["umfpack_Gflop"] = st.direct_flops_estimate / 1e9;
+  state.counters["available_GB"] = st.available_memory / 1e9;
   state.counters["peak_rss_GB"] = peak_memory_gb();
   state.SetLabel(st.linear_solver);
 }
 
-void BM_EfgSolve(benchmark::State& state) { time_solve(state, meshless::LinearSolverKind::automatic); }
-void BM_EfgSolveIterative(benchmark::State& state) { time_solve(state, meshless::LinearSolverKind::iterative); }
+void BM_EfgSolve(benchmark::State& state) { time_solve(state, {}); }
+void BM_EfgSolveAmgKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::amg_krylov}); }
+void BM_EfgSolveUmfpack(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
+void BM_EfgSolveJacobiBicgstab(benchmark::State& state) { time_solve(state, {LinearSolverKind::jacobi_bicgstab}); }
+
+void BM_EfgPreconditioner(benchmark::State& state, const std::string& options, bool vci, double d_max,
+                          double penalty_factor = 1e3) {
+  time_solve(state, {LinearSolverKind::amg_krylov, options, vci, d_max, penalty_factor});
+}
+
+const std::string kGmres = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side right ";
 
 }  // namespace
 
 BENCHMARK(BM_EfgSetup)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgAssembly)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(2);
+// All solvers at each size (ratios within one run). The 32k cloud does not fit UMFPACK, so its automatic
+// choice (BM_EfgSolve/32) is the AMG-Krylov solve.
 BENCHMARK(BM_EfgSolve)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK(BM_EfgSolveIterative)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveAmgKrylov)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveJacobiBicgstab)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
-BENCHMARK_MAIN();
+// The preconditioner survey on the 2k-node cloud (right-preconditioned GMRES(200) unless stated).
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, gamg, kGmres + "-pc_type gamg -pc_gamg_square_graph 0 -pc_gamg_threshold 0.05", true, 2.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, hypre_boomeramg,
+                  kGmres + "-pc_type hypre -pc_hypre_boomeramg_strong_threshold 0.5 -pc_hypre_boomeramg_coarsen_type HMIS "
+                           "-pc_hypre_boomeramg_interp_type ext+i -pc_hypre_boomeramg_P_max 4 "
+                           "-pc_hypre_boomeramg_nodal_coarsen 6 -pc_hypre_boomeramg_vec_interp_variant 2",
+                  true, 2.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, ml, kGmres + "-pc_type ml", true, 2.0)->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, ssor, kGmres + "-pc_type sor", true, 2.0)->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, bicgstab_ml, "-ksp_type bcgs -pc_type ml", true, 2.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+// Symmetric tangent (plain eq. 22 without VCI, k = 0): CG against GMRES with the same preconditioner.
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, symmetric_gmres_ml, kGmres + "-pc_type ml", false, 2.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, symmetric_cg_ml, "-ksp_type cg -pc_type ml", false, 2.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+// What sets the iteration count (docs/MESHLESS.md §2): the penalty (factor 10 instead of 1000) and the support
+// size (d_max 1.5 instead of 2).
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, penalty_10_ml, kGmres + "-pc_type ml", true, 2.0, 10.0)
+    ->Arg(13)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", true, 1.5)
+    ->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
+
+int main(int argc, char** argv) {
+  // PETSc (the AMG-Krylov solver) needs MPI and PETSc initialised; only the program name is passed on, so
+  // that PETSc does not read Google Benchmark's flags.
+  int petsc_argc = 1;
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  cached_model().reset();
+  return 0;
+}

@@ -32,6 +32,12 @@ GeometrySpec read_geometry(const JsonReader& r) {
     g.stl_unit_to_m = unit_to_metres(r, "length_unit");
   }
   g.mesh_size = r.in_range("mesh_size", 0.5, 200.0, true, true) * kMm;
+  if (auto refinement = r.optional_object("refinement")) {
+    g.load_patch_refinement = refinement->in_range("load_patch", 0.05, 1.0, true, true, g.load_patch_refinement);
+    g.fixed_region_refinement =
+        refinement->in_range("fixed_region", 0.05, 1.0, true, true, g.fixed_region_refinement);
+    refinement->finish();
+  }
   r.finish();
   return g;
 }
@@ -101,6 +107,7 @@ CutSpec read_cut(const JsonReader& r) {
   const Eigen::Vector3d d = r.vector3("direction");
   if (d.norm() < 1e-12) r.fail("direction", "expected a non-zero depth direction");
   c.direction = d.normalized();
+  c.steps = r.integer("steps", 1, 100000, 1);
   r.finish();
   return c;
 }
@@ -108,6 +115,7 @@ CutSpec read_cut(const JsonReader& r) {
 MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_size) {
   MeshlessSpec m;
   m.node_spacing = fem_mesh_size;
+  m.front_transition = fem_mesh_size * MeshlessSpec::kFrontTransitionPerSpacing;
   if (!r) return m;
   m.node_spacing = r->in_range("node_spacing", 0.5, 200.0, true, true, fem_mesh_size / kMm) * kMm;
   m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, 2.0);
@@ -115,6 +123,9 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
   m.quadrature_order = r->integer("quadrature_order", 1, 8, 2);
   m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, 1e3);
   m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, std::string("enrichment"));
+  m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true,
+                                   m.node_spacing * MeshlessSpec::kFrontTransitionPerSpacing / kMm) *
+                       kMm;
   r->finish();
   return m;
 }

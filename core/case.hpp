@@ -21,6 +21,11 @@ struct GeometrySpec {
   std::string stl_file;           ///< absolute path, resolved against the config's folder
   double stl_unit_to_m = 1e-3;    ///< metres per STL length unit
   double mesh_size = 0.012;       ///< FEM tetrahedron size [m]
+  /// Local element sizes as fractions of the mesh size (FEM) and of the node spacing (node cloud), so that a mesh
+  /// study refines where the compared quantities live: under the probe (the samples, the traction's edge) and
+  /// along the edge of a near_point fixed region (the clamp's edge, where most of the lung's error lives).
+  double load_patch_refinement = 0.5;
+  double fixed_region_refinement = 0.45;
 };
 
 /// Which nodes are held fixed (essential boundary, eq. 19/23).
@@ -58,6 +63,9 @@ struct CutSpec {
   std::vector<Eigen::Vector3d> polyline;  ///< [m]
   double depth = 0.0;                     ///< [m]
   Eigen::Vector3d direction = -Eigen::Vector3d::UnitZ();  ///< unit
+  /// Progressive incision (`tissue cut`): the cut advances along its polyline in this many equal increments,
+  /// one at the start of each of the first `steps` time steps. Solves that are not progressive cut at once.
+  int steps = 1;
 };
 
 struct MeshlessSpec {
@@ -67,6 +75,11 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default,
+  /// node_spacing / 50, keeps the shape functions continuous at the front and costs no accuracy against the FEM crack
+  /// (docs/MESHLESS.md §5: at l comparable to the Gauss-point spacing it stiffens the crack).
+  double front_transition = 0.012 * kFrontTransitionPerSpacing;
+  static constexpr double kFrontTransitionPerSpacing = 0.02;
 };
 
 struct FemSpec {

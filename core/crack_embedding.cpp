@@ -25,14 +25,14 @@ gmsh::vectorpair boundary_of(const gmsh::vectorpair& entities, bool combined) {
 
 }  // namespace
 
-CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m,
-                                 double extend) {
+CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m) {
   namespace occ = gmsh::model::occ;
   // One planar quad per panel (top segment swept along the depth direction), sharing the vertical
   // edges so the cut surface is conforming across the polyline's kinks. Loops run top_i -> top_{i+1}
   // -> bottom_{i+1} -> bottom_i on every panel, so all panels (and their mesh triangles) share one
   // orientation: the Crack plugin averages their normals at shared nodes.
   const Eigen::Vector3d d = cut.direction();
+  const double extend = cut.extension();
   std::vector<int> top, bottom, vertical;
   for (const Eigen::Vector3d& p : cut.top()) {
     const Eigen::Vector3d a = (p - extend * d) / to_m, b = (p + cut.depth() * d) / to_m;
@@ -63,8 +63,7 @@ CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const Rule
       if (piece.first != 2) continue;
       double x, y, z;
       occ::getCenterOfMass(2, piece.second, x, y, z);
-      const CutCoordinates cc = cut.nearest_panel_coordinates(Eigen::Vector3d(x, y, z) * to_m);
-      if (cc.depth > 0.0)
+      if (cut.frame(Eigen::Vector3d(x, y, z) * to_m).depth > 0.0)
         kept.insert(piece.second);
       else
         outside.push_back(piece);
@@ -114,28 +113,23 @@ void split_crack_nodes(const CrackEmbedding& embedding) {
   gmsh::plugin::run("Crack");
 }
 
-int tag_crack_faces(const RuledSurface& cut, double extend, TetMesh* mesh) {
-  // A face is on the cut when its vertices and centroid lie on one panel's plane, inside the panel
-  // (the surface line may bulge a little above the straight top segment, hence `extend`).
-  const double tolerance = 1e-6;  // [m]; OCC puts the nodes on the planar panels to round-off
-  auto on_panel = [&](const Eigen::Vector3d& x, int panel) {
-    const CutCoordinates c = cut.coordinates(x, panel);
-    return std::abs(c.s) < tolerance && c.zeta > -tolerance && c.zeta < c.length + tolerance &&
-           c.depth > -extend - tolerance && c.depth < cut.depth() + tolerance;
-  };
+int tag_crack_faces(const RuledSurface& cut, TetMesh* mesh) {
+  // A face is on the cut when its vertices and centroid lie on the cut surface (OCC puts the nodes on the planar
+  // panels to round-off; the extension covers where the surface line bulges above the straight top segments).
+  const double tolerance = 1e-6;  // [m]
   int count = 0;
   for (int f = 0; f < mesh->boundary_faces.rows(); ++f) {
-    Eigen::Vector3d x[3], centroid = Eigen::Vector3d::Zero();
+    Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+    bool on_cut = true;
     for (int k = 0; k < 3; ++k) {
-      x[k] = mesh->vertices.row(mesh->boundary_faces(f, k)).transpose();
-      centroid += x[k] / 3.0;
+      const Eigen::Vector3d x = mesh->vertices.row(mesh->boundary_faces(f, k)).transpose();
+      centroid += x / 3.0;
+      on_cut = on_cut && cut.distance(x) < tolerance;
     }
-    for (int p = 0; p < cut.num_panels(); ++p)
-      if (on_panel(centroid, p) && on_panel(x[0], p) && on_panel(x[1], p) && on_panel(x[2], p)) {
-        mesh->face_tags[f] = FaceTag::crack;
-        ++count;
-        break;
-      }
+    if (on_cut && cut.distance(centroid) < tolerance) {
+      mesh->face_tags[f] = FaceTag::crack;
+      ++count;
+    }
   }
   return count;
 }
@@ -143,13 +137,12 @@ int tag_crack_faces(const RuledSurface& cut, double extend, TetMesh* mesh) {
 TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const RuledSurface& cut,
                            double size) {
   constexpr double to_m = 1e-3;  // model in mm, like the built-in lung
-  constexpr double extend = 2e-3;
   GmshSession session;
   gmsh::model::add("cracked_block");
   const Eigen::Vector3d a = lo / to_m, ext = (hi - lo) / to_m;
   const int box = gmsh::model::occ::addBox(a.x(), a.y(), a.z(), ext.x(), ext.y(), ext.z());
   gmsh::model::occ::synchronize();
-  const CrackEmbedding embedding = embed_cut_in_body({box}, cut, to_m, extend);
+  const CrackEmbedding embedding = embed_cut_in_body({box}, cut, to_m);
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Mesh.MeshSizeMax", size / to_m);
   gmsh::option::setNumber("Mesh.MeshSizeMin", size / to_m / 4);
@@ -159,7 +152,7 @@ TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   split_crack_nodes(embedding);
 
   TetMesh mesh = read_gmsh_tets(to_m);  // both lips of the cut are boundary faces now
-  tag_crack_faces(cut, extend, &mesh);
+  tag_crack_faces(cut, &mesh);
   return mesh;
 }
 

@@ -21,17 +21,16 @@ struct CrackEmbedding {
 };
 
 /// Fragment the body's OCC volumes (one, or several when regions were imprinted) of the current model with
-/// the cut (model units = metres / to_m), extended `extend` [m] above its surface line so it pierces the
+/// the cut (model units = metres / to_m), raised by cut.extension() above its surface line so it pierces the
 /// surface cleanly; the parts outside the body are deleted. Throws std::runtime_error when the cut does not
 /// end up inside the body.
-CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m,
-                                 double extend);
+CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const RuledSurface& cut, double to_m);
 
 /// Run after the volume mesh is generated: duplicate the nodes on the cut (Gmsh Crack plugin).
 void split_crack_nodes(const CrackEmbedding& embedding);
 
-/// Tag the boundary faces lying on the cut plane panels as FaceTag::crack. Returns how many.
-int tag_crack_faces(const RuledSurface& cut, double extend, TetMesh* mesh);
+/// Tag the boundary faces lying on the cut surface as FaceTag::crack. Returns how many.
+int tag_crack_faces(const RuledSurface& cut, TetMesh* mesh);
 
 /// A cracked box [lo, hi] (metres) meshed at `size` [m]: boundary faces computed, crack faces tagged,
 /// every other face free_surface (the caller tags fixed/load faces). For tests of the crack pipeline.

@@ -22,7 +22,6 @@ namespace {
 
 constexpr double kSnapTolerance = 0.010;          // points meant to be on the surface: within 10 mm
 constexpr double kBuiltinSurfaceSizeMm = 3.0;     // resolution of the built-in lung's reference surface
-constexpr double kCrackExtension = 0.003;         // [m] the FEM cut reaches this far above the surface line
 
 // ---------------------------------------------------------------------------------------------------
 // Gmsh model construction (lengths in the model's own unit: mm for the built-in lung, the STL's unit)
@@ -254,16 +253,69 @@ int add_ball_field(const Eigen::Vector3d& centre, double radius, double thicknes
   return ball;
 }
 
-/// Refine where the solution is sensitive to the region boundaries: elements of at most r/2 within 1.5 r of
-/// the load centre (so the imprinted patch circle is resolved even on coarse meshes), and of at most d/4
-/// around a near_point fixed region (the body hangs from it). Model units (mm).
+/// True when every boundary curve of model face `face` lies within `radius` of `centre` (model units): the face is a
+/// piece of the surface inside the ball. (A face's centre of mass would not do: a large face with the imprinted patch
+/// as a hole has its centre inside the ball too.)
+bool face_inside_ball(int face, const Eigen::Vector3d& centre, double radius) {
+  constexpr int kSamplesPerCurve = 8;
+  gmsh::vectorpair curves;
+  gmsh::model::getBoundary({{2, face}}, curves, /*combined=*/false, /*oriented=*/false);
+  for (const auto& curve : curves) {
+    std::vector<double> lo, hi, xyz;
+    gmsh::model::getParametrizationBounds(1, std::abs(curve.second), lo, hi);
+    std::vector<double> params;
+    for (int k = 0; k <= kSamplesPerCurve; ++k) params.push_back(lo[0] + (hi[0] - lo[0]) * k / kSamplesPerCurve);
+    gmsh::model::getValue(1, std::abs(curve.second), params, xyz);
+    for (std::size_t k = 0; k + 2 < xyz.size(); k += 3)
+      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + 1e-6)) return false;
+  }
+  return true;
+}
+
+/// The curves where the imprinted fixed region (near_point) meets the rest of the body's surface: the clamp's edge,
+/// from the current model (after every fragment: the region imprint and a crack). The fixed patch is the part of the
+/// body's outer surface inside the fixed ball; its combined boundary is the edge.
+std::vector<double> clamp_edge_curves(const Case& c) {
+  gmsh::vectorpair volumes, outer, fixed, edge;
+  gmsh::model::getEntities(volumes, 3);
+  gmsh::model::getBoundary(volumes, outer, /*combined=*/true, /*oriented=*/false);
+  const Eigen::Vector3d centre = c.fixed_region.point / 1e-3;
+  for (const auto& face : outer)
+    if (face_inside_ball(std::abs(face.second), centre, c.fixed_region.distance / 1e-3))
+      fixed.emplace_back(2, std::abs(face.second));
+  std::vector<double> curves;
+  if (fixed.empty()) return curves;
+  gmsh::model::getBoundary(fixed, edge, /*combined=*/true, /*oriented=*/false);
+  for (const auto& curve : edge) curves.push_back(std::abs(curve.second));
+  return curves;
+}
+
+/// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
+/// of a mesh study refines there too (model units, mm):
+///  * elements of load_patch_refinement * size within 1.5 r of the load centre: the patch, its edge (where the
+///    traction jumps) and the samples around it;
+///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
+///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
+///    counts this costs).
 void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size) {
   const double r = c.load.radius / 1e-3;
   std::vector<double> fields{static_cast<double>(
-      add_ball_field(load_centre / 1e-3, 1.5 * r, r, std::min(size, 0.5 * r), size))};
+      add_ball_field(load_centre / 1e-3, 1.5 * r, r, c.geometry.load_patch_refinement * size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
-    const double d = c.fixed_region.distance / 1e-3;
-    fields.push_back(add_ball_field(c.fixed_region.point / 1e-3, 1.2 * d, 0.5 * d, std::min(size, 0.25 * d), size));
+    const std::vector<double> edge = clamp_edge_curves(c);
+    if (!edge.empty()) {
+      const double fine = c.geometry.fixed_region_refinement * size;
+      const int distance = gmsh::model::mesh::field::add("Distance");
+      gmsh::model::mesh::field::setNumbers(distance, "CurvesList", edge);
+      gmsh::model::mesh::field::setNumber(distance, "NumPointsPerCurve", 200);
+      const int threshold = gmsh::model::mesh::field::add("Threshold");
+      gmsh::model::mesh::field::setNumber(threshold, "InField", distance);
+      gmsh::model::mesh::field::setNumber(threshold, "SizeMin", fine);
+      gmsh::model::mesh::field::setNumber(threshold, "SizeMax", size);
+      gmsh::model::mesh::field::setNumber(threshold, "DistMin", fine);
+      gmsh::model::mesh::field::setNumber(threshold, "DistMax", fine + size);
+      fields.push_back(threshold);
+    }
   }
   const int min_field = gmsh::model::mesh::field::add("Min");
   gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
@@ -280,11 +332,12 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const int solid = c.geometry.source == GeometrySpec::Source::builtin_lung ? add_builtin_lung()
                                                                              : add_stl_solid(surface, to_m);
   const std::vector<int> body = imprint_regions(c, solid, load_centre);
-  refine_regions(c, load_centre, size / to_m);
   // The FEM crack (core/crack_embedding.hpp): embed the cut in the imprinted body, mesh, then duplicate
   // its nodes.
   const std::optional<CrackEmbedding> crack =
-      cut ? std::optional(embed_cut_in_body(body, *cut, to_m, kCrackExtension)) : std::nullopt;
+      cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
+  // After the last fragment, so that the clamp's edge curves are the ones that get meshed.
+  refine_regions(c, load_centre, size / to_m);
   TetMesh mesh;
   try {
     mesh = mesh_volume(size / to_m, to_m, [&] {
@@ -310,6 +363,30 @@ SurfacePoint snap(const Case& c, const TriangleSurface& s, const Eigen::Vector3d
                                 "(within {:.1f} mm)",
                                 what, p.distance * 1e3, tolerance * 1e3));
   return p;
+}
+
+/// The incision must end inside the tissue: below every point of its top line, the body must be thicker than the
+/// depth along the cut direction (a cut through the whole body would split it in two, which neither model treats).
+void check_cut_depth(const Case& c, const TriangleSurface& surface, const RuledSurface& cut) {
+  constexpr int kSamplesPerSegment = 4;
+  constexpr double kInset = 1e-4;  // [m] start the ray just inside the surface
+  double thinnest = std::numeric_limits<double>::infinity();
+  Eigen::Vector3d where = cut.top().front();
+  for (int j = 0; j < cut.num_panels(); ++j)
+    for (int k = 0; k <= kSamplesPerSegment; ++k) {
+      const Eigen::Vector3d p =
+          cut.top()[j] + (static_cast<double>(k) / kSamplesPerSegment) * (cut.top()[j + 1] - cut.top()[j]);
+      const double thickness = kInset + surface.ray_hit(p + kInset * cut.direction(), cut.direction());
+      if (thickness < thinnest) {
+        thinnest = thickness;
+        where = p;
+      }
+    }
+  if (cut.depth() >= thinnest)
+    throw CaseError(c.source_file, "/cut/depth",
+                    fmt::format("an incision {:.1f} mm deep leaves the body: below ({:.1f}, {:.1f}, {:.1f}) mm the "
+                                "tissue is only {:.1f} mm thick along the cut direction; expected a depth below that",
+                                cut.depth() * 1e3, where.x() * 1e3, where.y() * 1e3, where.z() * 1e3, thinnest * 1e3));
 }
 
 }  // namespace
@@ -353,15 +430,18 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
       top.push_back(snap(c, g.surface, c.cut->polyline[i], kSnapTolerance,
                          "/cut/polyline/" + std::to_string(i), "the cut point")
                         .point);
-    const SurfacePoint first = g.surface.closest_point(top.front());
-    if (first.normal.dot(c.cut->direction) > 0.0)
-      throw CaseError(c.source_file, "/cut/direction",
-                      "points out of the body at the first cut point; expected a direction into the tissue");
+    for (std::size_t i = 0; i < top.size(); ++i)
+      if (g.surface.closest_point(top[i]).normal.dot(c.cut->direction) > 0.0)
+        throw CaseError(c.source_file, "/cut/direction",
+                        fmt::format("points out of the body at cut point {} (/cut/polyline/{}); expected a direction "
+                                    "into the tissue at every point of the incision",
+                                    i, i));
     try {
       g.cut.emplace(top, c.cut->direction, c.cut->depth);
     } catch (const std::invalid_argument& e) {
-      throw CaseError(c.source_file, "/cut", std::string("expected a valid incision: ") + e.what());
+      throw CaseError(c.source_file, "/cut/polyline", std::string("expected a simple incision: ") + e.what());
     }
+    check_cut_depth(c, g.surface, *g.cut);
   }
   g.sample_points = choose_samples(g.surface, c.samples, g.load_centre, g.load_normal);
 
@@ -369,7 +449,7 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
     g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
-    if (g.cut) tag_crack_faces(*g.cut, kCrackExtension, &g.fem_mesh);
+    if (g.cut) tag_crack_faces(*g.cut, &g.fem_mesh);
   }
   if (options.build_node_cloud) {
     g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);

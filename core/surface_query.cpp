@@ -1,6 +1,7 @@
 #include "core/surface_query.hpp"
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <limits>
 #include <map>
 #include <utility>
@@ -43,6 +44,44 @@ SurfacePoint TriangleSurface::closest_point(const Eigen::Vector3d& query) const 
       best.triangle = t;
       best.normal = (b - a).cross(c - a).normalized();
     }
+  }
+  return best;
+}
+
+bool TriangleSurface::contains(const Eigen::Vector3d& x) const {
+  // Generalised winding number: the solid angles of the outward triangles seen from x sum to 4 pi inside and 0
+  // outside (Van Oosterom & Strackee's formula for one triangle's solid angle).
+  double solid_angle = 0.0;
+  for (int t = 0; t < triangles.rows(); ++t) {
+    const Eigen::Vector3d a = vertices.row(triangles(t, 0)).transpose() - x;
+    const Eigen::Vector3d b = vertices.row(triangles(t, 1)).transpose() - x;
+    const Eigen::Vector3d c = vertices.row(triangles(t, 2)).transpose() - x;
+    const double la = a.norm(), lb = b.norm(), lc = c.norm();
+    const double numerator = a.dot(b.cross(c));
+    const double denominator = la * lb * lc + a.dot(b) * lc + b.dot(c) * la + c.dot(a) * lb;
+    solid_angle += 2.0 * std::atan2(numerator, denominator);
+  }
+  return solid_angle > 2.0 * M_PI;
+}
+
+double TriangleSurface::ray_hit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const {
+  // Moller-Trumbore against every triangle.
+  double best = std::numeric_limits<double>::infinity();
+  for (int t = 0; t < triangles.rows(); ++t) {
+    const Eigen::Vector3d a = vertices.row(triangles(t, 0));
+    const Eigen::Vector3d e1 = vertices.row(triangles(t, 1)).transpose() - a;
+    const Eigen::Vector3d e2 = vertices.row(triangles(t, 2)).transpose() - a;
+    const Eigen::Vector3d p = dir.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-300) continue;
+    const Eigen::Vector3d r = origin - a;
+    const double u = r.dot(p) / det;
+    if (u < 0.0 || u > 1.0) continue;
+    const Eigen::Vector3d q = r.cross(e1);
+    const double v = dir.dot(q) / det;
+    if (v < 0.0 || u + v > 1.0) continue;
+    const double distance = e2.dot(q) / det;
+    if (distance > 0.0) best = std::min(best, distance);
   }
   return best;
 }

@@ -26,6 +26,11 @@ struct TriangleSurface {
   double area() const;
   /// Number of edges not shared by exactly two triangles (0 for a closed 2-manifold).
   int count_non_manifold_edges() const;
+  /// True when x lies inside the closed surface (generalised winding number > 1/2). O(#triangles).
+  bool contains(const Eigen::Vector3d& x) const;
+  /// Distance [m] along the unit direction `dir` from `origin` to the nearest crossing of the surface with a
+  /// positive parameter; infinity when the ray misses it. O(#triangles).
+  double ray_hit(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
 };
 
 /// Closest point on triangle (a, b, c) to p (Ericson, Real-Time Collision Detection §5.1.5).

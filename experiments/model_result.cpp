@@ -7,17 +7,63 @@
 
 namespace experiments {
 
+void describe_samples_near_cut(const core::Geometry& g, ModelResult* r) {
+  r->sample_cut_distance.clear();
+  r->sample_lip.clear();
+  if (!g.cut) return;
+  for (Eigen::Index i = 0; i < g.sample_points.rows(); ++i) {
+    const Eigen::Vector3d x = g.sample_points.row(i).transpose();
+    r->sample_cut_distance.push_back(g.cut->distance(x));
+    r->sample_lip.push_back(g.cut->frame(x).behind_front ? g.cut->side(x) : 0);
+  }
+}
+
+ModelResult fem_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
+  ModelResult r;
+  r.model = "fem";
+  r.sample_points = g.sample_points;
+  describe_samples_near_cut(g, &r);
+  r.sample_displacements = f.sample_displacements;
+  r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
+  r.total_seconds = setup + f.total_seconds;
+  int factorizations = 0;
+  for (const auto& s : f.steps) {
+    r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
+                       s.residuals, s.linear_iterations});
+    factorizations += s.factorizations;
+  }
+  r.details["lu_factorizations"] = factorizations;
+  r.details["linear_solver"] = "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)";
+  r.details["n_dofs"] = f.n_dofs;
+  r.details["n_cells"] = f.n_cells;
+  r.details["load_area_mm2"] = f.load_area * 1e6;
+  r.details["crack_faces"] = f.crack_faces;
+  r.details["probe_strain"] = {{"measure", "largest absolute principal strain within the load radius of the load centre"},
+                               {"mean", f.probe_strain.mean},
+                               {"peak", f.probe_strain.peak}};
+  r.details["geometry_seconds"] = setup;
+  r.details["timer_sections_seconds"] = f.sections;
+  std::vector<double> offsets_mm;
+  for (double o : f.sample_offsets) offsets_mm.push_back(o * 1e3);
+  r.details["sample_offsets_mm"] = offsets_mm;
+  return r;
+}
+
 void write_samples_csv(const std::string& path, const ModelResult& r) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << "sample,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm\n";
+  out << "sample,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm,cut_distance_mm,lip\n";
+  const bool cut = !r.sample_cut_distance.empty();
   for (Eigen::Index i = 0; i < r.sample_points.rows(); ++i) {
     const Eigen::Vector3d x = r.sample_points.row(i).transpose() * 1e3;
     const Eigen::Vector3d u = r.sample_displacements.row(i).transpose() * 1e3;
     // eq. 33: the displacement of a sample is the distance between its deformed and original positions.
-    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g}\n", i, x(0), x(1), x(2), u(0), u(1), u(2),
-                       u.norm());
+    out << fmt::format("{},{:.6f},{:.6f},{:.6f},{:.9g},{:.9g},{:.9g},{:.9g},{},{}\n", i, x(0), x(1), x(2), u(0), u(1),
+                       u(2), u.norm(), cut ? fmt::format("{:.6f}", r.sample_cut_distance[i] * 1e3) : std::string(),
+                       cut ? r.sample_lip[i] : 0);
   }
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
 }
 
 nlohmann::json timings_json(const ModelResult& r) {
@@ -53,6 +99,16 @@ void write_timings_json(const std::string& path, const ModelResult& r) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
   out << timings_json(r).dump(2) << "\n";
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
+}
+
+void write_text_file(const std::string& path, const std::string& text) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out) throw std::runtime_error("cannot open " + path + " for writing");
+  out << text;
+  out.close();
+  if (!out) throw std::runtime_error("writing " + path + " failed (disk full?)");
 }
 
 }  // namespace experiments

@@ -7,6 +7,9 @@
 #include <string>
 #include <vector>
 
+#include "core/geometry.hpp"
+#include "reference_fem/fem_model.hpp"
+
 namespace experiments {
 
 struct StepTiming {
@@ -27,13 +30,30 @@ struct ModelResult {
   double setup_seconds = 0.0;
   double total_seconds = 0.0;
   std::vector<StepTiming> steps;
+  /// Per sample when the case has a cut (empty otherwise): its distance to the cut [m], and the lip the shared rule
+  /// (core::RuledSurface::side) puts it on, +1 or -1 behind the crack front, 0 past it.
+  std::vector<double> sample_cut_distance;
+  std::vector<int> sample_lip;
   nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
 };
 
-/// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|).
+/// The FEM reference's run as a ModelResult; `geometry_seconds` (building the geometry and the FEM mesh) is
+/// added to the set-up and total times and recorded in the details.
+ModelResult fem_model_result(const core::Geometry& geometry, const reference_fem::FemRunResult& run,
+                             double geometry_seconds);
+
+/// Fill sample_cut_distance and sample_lip from the geometry's cut (nothing without one).
+void describe_samples_near_cut(const core::Geometry& geometry, ModelResult* result);
+
+/// samples.csv: sample, x_mm, y_mm, z_mm, ux_mm, uy_mm, uz_mm, magnitude_mm (eq. 33: |x' - x|), cut_distance_mm
+/// (empty without a cut), lip (+1 / -1 behind the cut's front, 0 elsewhere).
 void write_samples_csv(const std::string& path, const ModelResult& result);
 /// timings.json: setup, totals and per-step timings with Newton iterations and residuals.
 nlohmann::json timings_json(const ModelResult& result);
 void write_timings_json(const std::string& path, const ModelResult& result);
+
+/// Write `text` to `path`, replacing it; throws std::runtime_error naming the file when it cannot be opened
+/// or when any byte fails to reach it (full disk, closed stream).
+void write_text_file(const std::string& path, const std::string& text);
 
 }  // namespace experiments

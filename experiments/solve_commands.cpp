@@ -2,6 +2,8 @@
 
 #include <fmt/format.h>
 
+#include <stdexcept>
+
 #include <fstream>
 #include <iostream>
 
@@ -20,7 +22,9 @@ namespace {
 void write_model_files(const core::OutputDirectory& out, const core::Case& c, const ModelResult& r) {
   write_samples_csv(out.file("samples.csv").string(), r);
   write_timings_json(out.file("timings.json").string(), r);
-  std::ofstream(out.file("case.json")) << c.document.dump(2) << "\n";
+  std::ofstream config(out.file("case.json"));
+  config << c.document.dump(2) << "\n";
+  if (!config) throw std::runtime_error("could not write " + out.file("case.json").string());
 }
 
 void print_summary(const ModelResult& r) {
@@ -31,36 +35,6 @@ void print_summary(const ModelResult& r) {
   for (const auto& s : r.steps) iterations += s.iterations;
   std::cout << fmt::format("{}: {} steps, {} Newton iterations, max sample displacement {:.4f} mm, {:.1f} s\n",
                            r.model, r.steps.size(), iterations, max_u * 1e3, r.total_seconds);
-}
-
-ModelResult to_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
-  ModelResult r;
-  r.model = "fem";
-  r.sample_points = g.sample_points;
-  r.sample_displacements = f.sample_displacements;
-  r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
-  r.total_seconds = setup + f.total_seconds;
-  int factorizations = 0;
-  for (const auto& s : f.steps) {
-    r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
-                       s.residuals, s.linear_iterations});
-    factorizations += s.factorizations;
-  }
-  r.details["lu_factorizations"] = factorizations;
-  r.details["linear_solver"] = "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)";
-  r.details["n_dofs"] = f.n_dofs;
-  r.details["n_cells"] = f.n_cells;
-  r.details["load_area_mm2"] = f.load_area * 1e6;
-  r.details["crack_faces"] = f.crack_faces;
-  r.details["probe_strain"] = {{"measure", "largest absolute principal strain within the load radius of the load centre"},
-                               {"mean", f.probe_strain.mean},
-                               {"peak", f.probe_strain.peak}};
-  r.details["geometry_seconds"] = setup;
-  r.details["timer_sections_seconds"] = f.sections;
-  std::vector<double> offsets_mm;
-  for (double o : f.sample_offsets) offsets_mm.push_back(o * 1e3);
-  r.details["sample_offsets_mm"] = offsets_mm;
-  return r;
 }
 
 /// The case's geometry with one of its two discretisations, timed (the set-up cost of the model).
@@ -91,7 +65,7 @@ int run_solve_fem(const std::string& config, const std::string& out_dir) {
                               s.factorizations, s.residuals.back()));
   };
   const reference_fem::FemRunResult f = reference_fem::run_case(c, g, run);
-  const ModelResult r = to_model_result(g, f, geometry_seconds);
+  const ModelResult r = fem_model_result(g, f, geometry_seconds);
   write_model_files(out, c, r);
   out.commit();
   progress.done();
@@ -104,9 +78,6 @@ int run_solve_fem(const std::string& config, const std::string& out_dir) {
 
 int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   const core::Case c = core::load_case(config);
-  if (c.cut)
-    std::cerr << "warning: " << config << ": /cut is not modelled by the meshless solver yet (the enrichment of "
-                 "eqs. 29-32 is not wired into EfgModel); solving the uncut body\n";
   Progress progress("solve meshless", 3 + c.time.steps);
   core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
   double geometry_seconds = 0.0;
@@ -114,6 +85,35 @@ int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); });
   r.details["geometry_seconds"] = geometry_seconds;
+  describe_samples_near_cut(g, &r);
+  r.setup_seconds += geometry_seconds;
+  r.total_seconds += geometry_seconds;
+  write_model_files(out, c, r);
+  out.commit();
+  progress.done();
+  print_summary(r);
+  std::cout << fmt::format("wrote {}\n", out.destination().string());
+  return 0;
+}
+
+/// `tissue cut`: the EFG model with the case's incision made progressively, as a scalpel does (/cut/steps
+/// increments, one at the start of each of the first /cut/steps time steps; meshless::EfgModel::advance_cut).
+int run_cut(const std::string& config, const std::string& out_dir) {
+  const core::Case c = core::load_case(config);
+  if (!c.cut)
+    throw core::CaseError(config, "/cut", "required key is missing: `tissue cut` advances the case's incision");
+  if (c.cut->steps > c.time.steps)
+    throw core::CaseError(config, "/cut/steps",
+                          fmt::format("expected at most {} increments (one per time step, /time/steps), got {}",
+                                      c.time.steps, c.cut->steps));
+  Progress progress("cut", 3 + c.time.steps + (c.cut->steps - 1));
+  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
+  double geometry_seconds = 0.0;
+  const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
+  ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
+                                 [&](const std::string& line) { progress.step(line); }, {}, /*progressive_cut=*/true);
+  r.details["geometry_seconds"] = geometry_seconds;
+  describe_samples_near_cut(g, &r);
   r.setup_seconds += geometry_seconds;
   r.total_seconds += geometry_seconds;
   write_model_files(out, c, r);
@@ -143,6 +143,17 @@ void add_solve_commands(CLI::App& app) {
   efg->add_option("CONFIG", efg_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   efg->add_option("--out", efg_out, "Output folder (written atomically)")->required();
   efg->callback([] { throw CommandResult{run_solve_meshless(efg_config, efg_out)}; });
+
+  auto* cut = app.add_subcommand(
+      "cut",
+      "Progressive incision with the EFG model: the case's cut advances along its polyline in /cut/steps increments "
+      "(one at the start of each of the first /cut/steps time steps), each a local update of the shape functions "
+      "and a re-solve with the history carried over. Writes per output step the node cloud's cells and the opened "
+      "cut (VTU), then samples.csv, timings.json (with every update) and case.json");
+  static std::string cut_config, cut_out;
+  cut->add_option("CONFIG", cut_config, "Load-case JSON file with a /cut (schema: docs/CONFIG.md)")->required();
+  cut->add_option("--out", cut_out, "Output folder (written atomically)")->required();
+  cut->callback([] { throw CommandResult{run_cut(cut_config, cut_out)}; });
 }
 
 }  // namespace experiments

@@ -2,6 +2,6 @@
 #include <CLI/CLI.hpp>
 
 namespace experiments {
-/// `tissue solve fem CONFIG --out DIR` (and, later, `tissue solve meshless`).
+/// `tissue solve fem|meshless CONFIG --out DIR` and `tissue cut CONFIG --out DIR` (progressive incision).
 void add_solve_commands(CLI::App& app);
 }  // namespace experiments

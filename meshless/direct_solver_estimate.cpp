@@ -3,7 +3,6 @@
 #include <fmt/format.h>
 #include <amd.h>
 #include <umfpack.h>
-#include <unistd.h>
 
 #include <stdexcept>
 #include <type_traits>
@@ -56,11 +55,6 @@ DirectSolverEstimate estimate_direct_solver_blocked(const UmfpackMatrix& block_p
   e.peak_memory_bytes = 1.25 * e.factor_bytes + matrix_bytes;
   e.factorisation_flops = 2.0 * info[AMD_NMULTSUBS_LU] * b * b * b;  // one multiply-subtract pair = 2 flops
   return e;
-}
-
-double physical_memory_bytes() {
-  const long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && page_size > 0 ? static_cast<double>(pages) * static_cast<double>(page_size) : 0.0;
 }
 
 }  // namespace meshless

@@ -31,7 +31,4 @@ DirectSolverEstimate estimate_direct_solver(const UmfpackMatrix& pattern);
 /// block_size^3. tests/test_efg_linear_solvers.cpp compares it with UMFPACK's full analysis.
 DirectSolverEstimate estimate_direct_solver_blocked(const UmfpackMatrix& block_pattern, int block_size);
 
-/// Physical memory of this machine [bytes] (sysconf), the budget the estimate is compared with.
-double physical_memory_bytes();
-
 }  // namespace meshless

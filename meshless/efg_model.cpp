@@ -3,16 +3,16 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include <Eigen/IterativeLinearSolvers>
 #include <limits>
-#include <Eigen/UmfPackSupport>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <exception>
 #include <stdexcept>
+#include <unordered_map>
 
-#include "meshless/direct_solver_estimate.hpp"
+#include "meshless/cut_weights.hpp"
+#include "meshless/efg_linear_solver.hpp"
 #include "meshless/mls_shape_functions.hpp"
 #include "meshless/node_search.hpp"
 #include "meshless/support_radii.hpp"
@@ -57,35 +57,10 @@ void parallel_for(int n, int chunk, const Body& body) {
 
 }  // namespace
 
-struct EfgModel::Factorisation {
-  // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
-  // row), where Eigen's SparseLU is an order of magnitude slower.
-  Eigen::UmfPackLU<UmfpackMatrix> lu;
-  /// umfpack_numeric's status. Eigen::UmfPackLU reports every non-zero status as NumericalIssue, but the
-  /// determinant under/overflow warnings come with a valid factorisation (UMFPACK user guide), so only the
-  /// singular-matrix warning and the errors are failures; the message names which one it was.
-  static bool factorised(long status) {
-    return status == UMFPACK_OK || status == UMFPACK_WARNING_determinant_underflow ||
-           status == UMFPACK_WARNING_determinant_overflow;
-  }
-  static std::string describe(long status) {
-    switch (status) {
-      case UMFPACK_WARNING_singular_matrix: return "numerically singular matrix";
-      case UMFPACK_ERROR_out_of_memory: return "UMFPACK ran out of memory";
-      default: return fmt::format("UMFPACK status {}", status);
-    }
-  }
-  bool analysed = false;
-  UmfpackMatrix colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
-  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
-  bool valid = false;  // holds a factorisation (or preconditioner) of the current matrix_
-};
-
 EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
     : problem_(std::move(problem)),
       options_(options),
-      law_(problem_.material),
-      factorisation_(std::make_unique<Factorisation>()) {
+      law_(problem_.material) {
   if (!(problem_.node_spacing > 0.0))
     throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
   if (!(problem_.penalty_factor > 0.0))
@@ -104,39 +79,56 @@ EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
 
 EfgModel::~EfgModel() = default;
 
-bool EfgModel::choose_direct_solver() {
-  switch (options_.linear_solver) {
-    case LinearSolverKind::direct: return true;
-    case LinearSolverKind::iterative: return false;
-    case LinearSolverKind::automatic: break;
-  }
-  const DirectSolverEstimate e = estimate_direct_solver_blocked(sparsity_->node_pattern(), 3);
-  stats_.direct_peak_memory_estimate = e.peak_memory_bytes;
-  stats_.direct_flops_estimate = e.factorisation_flops;
-  return e.peak_memory_bytes <= options_.direct_solver_memory_fraction * physical_memory_bytes();
+void EfgModel::install_cut(const core::RuledSurface* cut) {
+  cut_weights_.reset();
+  mls_->set_weight_modifier(nullptr);
+  if (!cut) return;
+  cut_weights_ = std::make_unique<CutWeights>(*cut, problem_.mesh.vertices, radii_->radii(), problem_.cut_treatment,
+                                               problem_.front_transition);
+  const CutWeights* weights = cut_weights_.get();
+  mls_->set_weight_modifier([weights](int node, const Eigen::Vector3d& x, int side, Eigen::Vector3d* grad) {
+    return (*weights)(node, x, side, grad);
+  });
+}
+
+void EfgModel::build_quadrature(QuadraturePoints* volume, QuadraturePoints* surface) const {
+  const core::TetMesh& mesh = problem_.mesh;
+  const core::RuledSurface* cut = problem_.cut ? &*problem_.cut : nullptr;
+  *volume = volume_quadrature(mesh, problem_.quadrature_order, cut);
+  *surface = boundary_quadrature(mesh, problem_.quadrature_order, cut);
+  if (cut) surface->append(lip_quadrature(mesh, problem_.quadrature_order, *cut));
 }
 
 void EfgModel::setup_system() {
   auto t0 = std::chrono::steady_clock::now();
   const core::TetMesh& mesh = problem_.mesh;
-  const int n = mesh.num_vertices();
   search_ = std::make_unique<NodeSearch>(mesh.vertices);
   radii_ = std::make_unique<SupportRadii>(mesh.vertices, *search_, problem_.support);
   mls_ = std::make_unique<MlsShapeFunctions>(mesh.vertices, *radii_, *search_);
-  core::PointMatrix vp, sp;
-  Eigen::VectorXd vw, sw;
-  std::vector<int> vc, sc;
-  tet_quadrature_points(mesh, problem_.quadrature_order, &vp, &vw, &vc);
-  face_quadrature_points(mesh, problem_.quadrature_order, &sp, &sw, &sc);
+  install_cut(problem_.cut ? &*problem_.cut : nullptr);
+  QuadraturePoints vq, sq;
+  build_quadrature(&vq, &sq);
   timings_.setup_seconds = seconds_since(t0);
 
   // Shape functions and gradients are tabulated once: the cloud does not move (eq. 17 small strain).
   t0 = std::chrono::steady_clock::now();
-  volume_ = tabulate_shape_functions(*mls_, std::move(vp), std::move(vw), std::move(vc), true);
-  surface_ = tabulate_shape_functions(*mls_, std::move(sp), std::move(sw), std::move(sc), false);
+  volume_ = tabulate_shape_functions(*mls_, std::move(vq), true);
+  surface_ = tabulate_shape_functions(*mls_, std::move(sq), false);
   timings_.shape_function_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
+  const int nq = volume_.size();
+  states_.assign(nq, core::KelvinState{});
+  const int n = mesh.num_vertices();
+  u_ = Eigen::VectorXd::Zero(3 * n);
+  build_couplings();  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
+  timings_.setup_seconds += seconds_since(t0);
+  set_up_ = true;
+}
+
+void EfgModel::build_couplings() {
+  const core::TetMesh& mesh = problem_.mesh;
+  const int n = mesh.num_vertices();
   volume_incidence_ = NodeIncidence(volume_, n);
   surface_incidence_ = NodeIncidence(surface_, n);
   for (int i = 0; i < n; ++i)
@@ -149,12 +141,22 @@ void EfgModel::setup_system() {
   sparsity_ = std::make_unique<NodalSparsity>(n, std::vector<const ShapeTable*>{&volume_, &surface_},
                                               std::vector<const NodeIncidence*>{&volume_incidence_, &surface_incidence_});
   matrix_ = sparsity_->make_matrix();
+  matrix_current_ = false;
+  // A new pattern (set-up, or a cut that advanced): choose and analyse the solver for it again.
+  // The automatic choice runs an AMD ordering of the node pairs: part of the set-up cost.
+  const auto t_choice = std::chrono::steady_clock::now();
+  linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, mesh.vertices, problem_.name);
+  timings_.setup_seconds += seconds_since(t_choice);
+  stats_.linear_solver = linear_solver_->description();
+  stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
+  stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
+  stats_.available_memory = linear_solver_->available_memory_bytes();
   boundary_ = make_boundary_terms(problem_, surface_, alpha_);
 
   // Linear variationally consistent integration: xi_i = (oint phi_i n - int grad phi_i) / int_{supp i} 1, both
   // integrals by the same quadrature the assembly uses, so that the corrected test gradients satisfy the
-  // discrete divergence theorem exactly (linear patch test to round-off, eq. 21 with eq. 24's traction term).
-  const Eigen::Matrix<double, Eigen::Dynamic, 3> normals = boundary_face_normals(mesh);
+  // discrete divergence theorem exactly (linear patch test to round-off, eq. 21 with eq. 24's traction term). The
+  // boundary integral runs over the outer faces and over both lips of a cut: they bound the body too.
   Eigen::Matrix3Xd defect = Eigen::Matrix3Xd::Zero(3, n);
   Eigen::VectorXd support_volume = Eigen::VectorXd::Zero(n);
   for (int q = 0; q < volume_.size(); ++q)
@@ -162,40 +164,143 @@ void EfgModel::setup_system() {
       defect.col(volume_.nodes[s]) -= volume_.weights[q] * volume_.dphi.col(s);
       support_volume[volume_.nodes[s]] += volume_.weights[q];
     }
-  for (int q = 0; q < surface_.size(); ++q) {
-    const Eigen::Vector3d nq = normals.row(surface_.cells[q]).transpose();
+  for (int q = 0; q < surface_.size(); ++q)
     for (int s = surface_.begin(q); s < surface_.end(q); ++s)
-      defect.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * nq;
-  }
+      defect.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * surface_.normals.col(q);
   divergence_defect_ = defect.colwise().norm().maxCoeff();
   vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
   if (options_.variationally_consistent)
     for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect.col(i) / support_volume[i];
 
   const int nq = volume_.size();
-  states_.assign(nq, core::KelvinState{});
   strain_.assign(nq, core::Vector6::Zero());
   stress_.assign(nq, core::Vector6::Zero());
   tangent_.assign(nq, core::Matrix6::Zero());
-  u_ = Eigen::VectorXd::Zero(3 * n);
   residual_ = Eigen::VectorXd::Zero(3 * n);
   external_ = Eigen::VectorXd::Zero(3 * n);
-  timings_.setup_seconds += seconds_since(t0);
 
   stats_.num_nodes = n;
   stats_.num_cells = mesh.num_tets();
   stats_.num_volume_points = volume_.size();
   stats_.num_boundary_points = surface_.size();
+  stats_.num_lip_points = 0;
+  for (int q = 0; q < surface_.size(); ++q) stats_.num_lip_points += surface_.on_lip(q);
+  stats_.num_cut_modified_nodes = cut_weights_ ? cut_weights_->num_modified() : 0;
   stats_.mean_nodes_per_point = nq > 0 ? static_cast<double>(volume_.nodes.size()) / nq : 0.0;
   stats_.matrix_nonzeros = 9 * sparsity_->num_block_entries();
   stats_.alpha = alpha_;
   stats_.penalised_area = boundary_.penalised_area;
   stats_.loaded_area = boundary_.loaded_area;
-  const auto t_choice = std::chrono::steady_clock::now();
-  use_direct_ = choose_direct_solver();  // an AMD ordering of the node pairs: part of the set-up cost
-  timings_.setup_seconds += seconds_since(t_choice);
-  stats_.linear_solver = use_direct_ ? "UMFPACK (Eigen::UmfPackLU)" : "BiCGSTAB (Jacobi preconditioner)";
-  set_up_ = true;
+}
+
+namespace {
+
+/// For each point of `now`, the row of `before` at the same place (same cell, same side, bitwise the same
+/// coordinates), or -1.
+std::vector<int> match_points(const ShapeTable& before, const QuadraturePoints& now) {
+  std::unordered_map<long long, std::vector<int>> by_cell;
+  auto key = [](int cell, int side) { return 4LL * cell + (side + 1); };
+  for (int q = 0; q < before.size(); ++q) by_cell[key(before.cells[q], before.sides[q])].push_back(q);
+  std::vector<int> match(now.size(), -1);
+  for (int q = 0; q < now.size(); ++q) {
+    const auto it = by_cell.find(key(now.cells[q], now.sides[q]));
+    if (it == by_cell.end()) continue;
+    for (int old : it->second)
+      if (before.points.row(old) == now.points.row(q)) {
+        match[q] = old;
+        break;
+      }
+  }
+  return match;
+}
+
+}  // namespace
+
+bool EfgModel::weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
+                               std::vector<NodeHit>* hits) const {
+  constexpr double kTolerance = 1e-13;  // round-off of h and of rho * grad h
+  search_->covering(x, radii_->radii(), radii_->max_radius(), hits);
+  const CutWeights* after = cut_weights_.get();
+  Eigen::Vector3d g0 = Eigen::Vector3d::Zero(), g1 = Eigen::Vector3d::Zero();
+  for (const NodeHit& hit : *hits) {
+    const int i = hit.node;
+    if (!(before && before->modifies(i)) && !(after && after->modifies(i))) continue;
+    const double h0 = before ? (*before)(i, x, side, gradients ? &g0 : nullptr) : 1.0;
+    const double h1 = after ? (*after)(i, x, side, gradients ? &g1 : nullptr) : 1.0;
+    if (std::abs(h1 - h0) > kTolerance) return true;
+    if (gradients && radii_->radius(i) * (g1 - g0).norm() > kTolerance) return true;
+  }
+  return false;
+}
+
+CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
+  if (!set_up_) throw std::logic_error("EfgModel::advance_cut before setup_system");
+  const auto t0 = std::chrono::steady_clock::now();
+  CutUpdate report;
+  const std::unique_ptr<CutWeights> before = std::move(cut_weights_);
+  const std::optional<core::RuledSurface> previous_cut = problem_.cut;
+  problem_.cut = cut;
+  install_cut(&cut);
+  QuadraturePoints vq, sq;
+  build_quadrature(&vq, &sq);
+
+  // Reuse the shape functions of every point that is still there and whose covering nodes keep their weights
+  // (paper §4: only the shape functions near the new part of the cut are computed again). A node's weight can
+  // change only if its support meets the cut (old or new), so points farther than 2 rho_max from both cuts are
+  // reused without looking.
+  const double reach = 2.0 * radii_->max_radius();
+  auto reuse_of = [&](const std::vector<int>& same, const QuadraturePoints& points, bool gradients, int* recomputed) {
+    std::vector<int> reuse = same;
+    std::vector<char> changed(points.size(), 0);
+    parallel_for(points.size(), 256, [&](int q) {
+      thread_local std::vector<NodeHit> hits;
+      if (reuse[q] < 0) return;
+      const Eigen::Vector3d x = points.points.row(q).transpose();
+      const bool near = cut.frame(x).distance < reach || (previous_cut && previous_cut->frame(x).distance < reach);
+      if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits)) changed[q] = 1;
+    });
+    for (int q = 0; q < points.size(); ++q) {
+      if (changed[q]) reuse[q] = -1;
+      *recomputed += reuse[q] < 0;
+    }
+    return reuse;
+  };
+  const std::vector<int> volume_same = match_points(volume_, vq);
+  const std::vector<int> volume_reuse = reuse_of(volume_same, vq, true, &report.volume_points_recomputed);
+  const std::vector<int> surface_reuse =
+      reuse_of(match_points(surface_, sq), sq, false, &report.boundary_points_recomputed);
+  report.volume_points = vq.size();
+  report.boundary_points = sq.size();
+
+  // History (eqs. 15-16): a point that is still there keeps its state; a new point (a cell split differently)
+  // takes the state of the nearest old point of the same cell.
+  std::vector<core::KelvinState> states(vq.size());
+  std::unordered_map<int, std::vector<int>> old_points_of_cell;
+  for (int q = 0; q < volume_.size(); ++q) old_points_of_cell[volume_.cells[q]].push_back(q);
+  for (int q = 0; q < vq.size(); ++q) {
+    if (volume_same[q] >= 0) {
+      states[q] = states_[volume_same[q]];
+      continue;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (int old : old_points_of_cell.at(vq.cells[q])) {
+      const double d = (volume_.points.row(old) - vq.points.row(q)).squaredNorm();
+      if (d < best) {
+        best = d;
+        states[q] = states_[old];
+      }
+    }
+  }
+
+  const auto t1 = std::chrono::steady_clock::now();
+  volume_ = tabulate_shape_functions(*mls_, std::move(vq), true, volume_, volume_reuse);
+  surface_ = tabulate_shape_functions(*mls_, std::move(sq), false, surface_, surface_reuse);
+  report.shape_function_seconds = seconds_since(t1);
+  states_ = std::move(states);
+  build_couplings();
+  report.seconds = seconds_since(t0);
+  report.modified_nodes = cut_weights_->num_modified();
+  return report;
 }
 
 void EfgModel::update_material(double dt) {
@@ -290,52 +395,19 @@ void EfgModel::assemble_system(bool with_matrix) {
     throw std::runtime_error(fmt::format("EfgModel '{}': the residual is not finite", problem_.name));
   if (with_matrix) {
     matrix_current_ = true;
-    factorisation_->valid = false;
+    linear_solver_->invalidate();
   }
 }
 
 void EfgModel::solve() {
-  if (!matrix_current_ && !factorisation_->valid)
+  if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
     throw std::logic_error("EfgModel::solve without an assembled matrix");
-  Eigen::VectorXd du;
-  Factorisation& f = *factorisation_;
-  if (use_direct_solver()) {
-    if (!f.valid) {
-      f.colmajor = matrix_;
-      const UmfpackMatrix& a = f.colmajor;
-      if (!f.analysed) {
-        f.lu.analyzePattern(a);  // the pattern never changes: order the columns once
-        if (f.lu.info() != Eigen::Success)
-          throw std::runtime_error(fmt::format("EfgModel '{}': UMFPACK symbolic analysis failed: {}", problem_.name,
-                                               Factorisation::describe(f.lu.umfpackFactorizeReturncode())));
-        f.analysed = true;
-      }
-      f.lu.factorize(a);
-      const long status = f.lu.umfpackFactorizeReturncode();
-      if (!Factorisation::factorised(status))
-        throw std::runtime_error(fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", problem_.name,
-                                             Factorisation::describe(status)));
-      f.valid = true;
-    }
-    const Eigen::VectorXd rhs = -residual_;
-    du = f.lu.solve(rhs);
-  } else {
-    if (!f.valid) {
-      f.bicgstab.setTolerance(options_.iterative_tolerance);
-      f.bicgstab.setMaxIterations(options_.iterative_max_iterations);
-      f.bicgstab.compute(matrix_);
-      f.valid = true;
-    }
-    du = f.bicgstab.solve(-residual_);
-    last_linear_iterations_ = static_cast<int>(f.bicgstab.iterations());
-    if (f.bicgstab.info() != Eigen::Success)
-      throw std::runtime_error(fmt::format("EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g})",
-                                           problem_.name, f.bicgstab.iterations(), f.bicgstab.error()));
+  if (!linear_solver_->prepared()) {
+    linear_solver_->prepare(matrix_);
+    stats_.linear_solver = linear_solver_->description();  // the multigrid reports its levels once built
   }
-  if (!du.allFinite())
-    throw std::runtime_error(fmt::format("EfgModel '{}': the linear solve produced a non-finite update",
-                                         problem_.name));
-  u_ += du;  // eq. 14
+  u_ += linear_solver_->solve(-residual_);  // eq. 14; solve() checks the update is finite
+  last_linear_iterations_ = linear_solver_->last_iterations();
   factorised_dt_ = current_dt_;
 }
 
@@ -357,10 +429,10 @@ StepRecord EfgModel::solve_step(int step) {
   // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
   // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
   const bool constant_tangent = problem_.material.k == 0.0;
-  bool refresh = !factorisation_->valid || factorised_dt_ != current_dt_;
+  bool refresh = !linear_solver_->prepared() || factorised_dt_ != current_dt_;
   double previous = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
-    const bool reuse = !refresh && factorisation_->valid && factorised_dt_ == current_dt_;
+    const bool reuse = !refresh && linear_solver_->prepared() && factorised_dt_ == current_dt_;
     auto t0 = std::chrono::steady_clock::now();
     assemble_system(!reuse);
     if (reuse) rec.reused_factorisation = true;
@@ -418,8 +490,11 @@ void EfgModel::run(const StepObserver& observer) {
   }
 }
 
-Eigen::Vector3d EfgModel::displacement_at(const Eigen::Vector3d& x) const {
-  const MlsEvaluation e = mls_->evaluate(x, false);
+Eigen::Vector3d EfgModel::displacement_at(const Eigen::Vector3d& x, int side) const {
+  // A point next to a cut is on the lip given by the rule both models share (core::RuledSurface::side), unless
+  // the caller names one.
+  if (side == 0 && problem_.cut) side = problem_.cut->side(x);
+  const MlsEvaluation e = mls_->evaluate(x, false, side);
   Eigen::Vector3d u = Eigen::Vector3d::Zero();
   for (int k = 0; k < e.size(); ++k) u += e.phi[k] * u_.segment<3>(3 * e.nodes[k]);  // eq. 7
   if (!u.allFinite())

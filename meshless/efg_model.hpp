@@ -21,6 +21,9 @@ namespace meshless {
 class NodeSearch;
 class SupportRadii;
 class MlsShapeFunctions;
+class CutWeights;
+struct NodeHit;
+class EfgLinearSolver;
 
 /// What happened in one time step.
 struct StepRecord {
@@ -29,7 +32,7 @@ struct StepRecord {
   double dt = 0.0;          ///< [s]
   double load_scale = 0.0;  ///< load_scale(time)
   int newton_iterations = 0;               ///< linear solves
-  int linear_iterations = 0;               ///< BiCGSTAB iterations over the step (0 with the direct solver)
+  int linear_iterations = 0;               ///< Krylov iterations over the step (0 with the direct solver)
   std::vector<double> residuals;           ///< ||R|| / ||F_ext|| before each solve and after the last
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
@@ -43,12 +46,24 @@ struct EfgTimings {
   double solve_seconds = 0.0;            ///< all steps (factorisation + back substitution)
 };
 
+/// What a local update of the cut did (EfgModel::advance_cut).
+struct CutUpdate {
+  int volume_points = 0, boundary_points = 0;  ///< after the update
+  int volume_points_recomputed = 0;            ///< shape functions evaluated again (new or changed weights)
+  int boundary_points_recomputed = 0;
+  int modified_nodes = 0;                      ///< nodes whose weights the new cut modifies
+  double shape_function_seconds = 0.0;         ///< the MLS evaluations
+  double seconds = 0.0;                        ///< the whole update (quadrature, MLS, couplings, VCI)
+};
+
 /// Sizes for reports.
 struct EfgStatistics {
   int num_nodes = 0;
   int num_cells = 0;
   int num_volume_points = 0;
   int num_boundary_points = 0;
+  int num_lip_points = 0;             ///< boundary points on the lips of the cut (both sides)
+  int num_cut_modified_nodes = 0;     ///< nodes whose weights the cut modifies (support meets the cut)
   double mean_nodes_per_point = 0.0;  ///< mean support size at the volume points
   long long matrix_nonzeros = 0;
   double alpha = 0.0;                 ///< penalty parameter [Pa/m]
@@ -58,6 +73,7 @@ struct EfgStatistics {
   /// only, 0 when not estimated).
   double direct_peak_memory_estimate = 0.0;  ///< [bytes]
   double direct_flops_estimate = 0.0;
+  double available_memory = 0.0;  ///< [bytes] the budget the estimate was compared with (available_memory())
 };
 
 class EfgModel {
@@ -91,11 +107,19 @@ class EfgModel {
   /// @param loaded_faces #boundary faces mask of the loaded faces (empty: the faces tagged load)
   /// @param traction t-bar [Pa] at full load on those faces (eq. 24), scaled by problem().load_scale
   void restart(std::vector<char> loaded_faces, VectorField traction);
+  /// Replace the cut by `cut` (a progressive incision: the cut advanced) after setup_system(), keeping the
+  /// history. A local update (paper §4): the quadrature is rebuilt (cheap geometry), but only the points that are
+  /// new or whose covering nodes change weight get their shape functions evaluated again; the others keep their
+  /// rows. Points of a cell that is split differently take the history of the nearest old point of that cell.
+  /// The next solve refactorises. Gives the same tables as a set-up with `cut` from the start, to round-off.
+  CutUpdate advance_cut(const core::RuledSurface& cut);
 
   // --- results ---------------------------------------------------------------------------------------------
-  /// u(X) = sum_i phi_i(X) U_i (eq. 7) at arbitrary material points, #points by 3 [m].
+  /// u(X) = sum_i phi_i(X) U_i (eq. 7) at arbitrary material points, #points by 3 [m]. A point next to the cut
+  /// is evaluated on the lip core::RuledSurface::side assigns to it (the rule the FEM reference uses too).
   core::PointMatrix displacements_at(const core::PointMatrix& points) const;
-  Eigen::Vector3d displacement_at(const Eigen::Vector3d& x) const;
+  /// One point; `side` (+1 / -1) evaluates a point on the cut as the limit from that lip, 0 applies the rule.
+  Eigen::Vector3d displacement_at(const Eigen::Vector3d& x, int side = 0) const;
   /// Displacement at the node positions (interpolated, not the parameters).
   core::PointMatrix nodal_displacements() const { return displacements_at(nodes()); }
   const Eigen::VectorXd& nodal_parameters() const { return u_; }  ///< 3N, the U_i
@@ -112,6 +136,10 @@ class EfgModel {
   const EfgTimings& timings() const { return timings_; }
   const EfgStatistics& statistics() const { return stats_; }
   const MlsShapeFunctions& shape_functions() const { return *mls_; }
+  /// The cut's weight modifier, or null for an uncut body.
+  const CutWeights* cut_weights() const { return cut_weights_.get(); }
+  /// The system matrix of the last assemble_system(true) (tangent + penalty, eq. 20).
+  const SparseMatrix& system_matrix() const { return matrix_; }
   double alpha() const { return alpha_; }
   double residual_norm() const { return residual_.norm(); }
   /// Largest |sum_i int grad phi_i - oint phi_i n| over nodes before the VCI correction [m^2] (diagnostic).
@@ -119,9 +147,15 @@ class EfgModel {
 
  private:
   void update_material(double dt);
-  bool use_direct_solver() const { return use_direct_; }
-  /// Decide direct or iterative for the assembled pattern (setup_system); fills the estimates in stats_.
-  bool choose_direct_solver();
+  /// Build the weight modifier of `cut` (null: none) and install it into the MLS shape functions.
+  void install_cut(const core::RuledSurface* cut);
+  /// Volume points, and boundary points (outer faces and the lips of the cut), for the current problem.
+  void build_quadrature(QuadraturePoints* volume, QuadraturePoints* surface) const;
+  /// Everything that follows from the tabulated points: incidence, sparsity, boundary terms, VCI, statistics.
+  void build_couplings();
+  /// True when a node covering x has a different weight (or gradient) under `before` than under the current cut.
+  bool weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
+                       std::vector<NodeHit>* hits) const;
 
   EfgProblem problem_;
   EfgOptions options_;
@@ -131,6 +165,7 @@ class EfgModel {
   std::unique_ptr<NodeSearch> search_;
   std::unique_ptr<SupportRadii> radii_;
   std::unique_ptr<MlsShapeFunctions> mls_;
+  std::unique_ptr<CutWeights> cut_weights_;
   ShapeTable volume_, surface_;
   NodeIncidence volume_incidence_, surface_incidence_;
   std::unique_ptr<NodalSparsity> sparsity_;
@@ -144,11 +179,9 @@ class EfgModel {
 
   Eigen::VectorXd u_, residual_, external_;
   SparseMatrix matrix_;
-  struct Factorisation;
-  std::unique_ptr<Factorisation> factorisation_;
+  std::unique_ptr<EfgLinearSolver> linear_solver_;  // created by setup_system for the sparsity pattern
   double current_dt_ = 0.0;
   double factorised_dt_ = -1.0;
-  bool use_direct_ = true;
   int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 

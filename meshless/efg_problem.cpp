@@ -24,6 +24,9 @@ EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
   p.load_scale = [program](double time) { return program.scale(time); };
   p.step_times = program.step_times;
   p.output_every = c.output.every;
+  p.cut = g.cut;
+  p.cut_treatment = cut_treatment_from_name(c.meshless.enrichment);
+  p.front_transition = c.meshless.front_transition;
   return p;
 }
 

@@ -3,23 +3,29 @@
 // (problem_from_case) or a verification problem built in code (patch test, cantilever, creep bar).
 #include <Eigen/Core>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/kelvin_law.hpp"
+#include "core/ruled_surface.hpp"
 #include "core/tet_mesh.hpp"
+#include "meshless/cut_weights.hpp"
 #include "meshless/support_radii.hpp"
 
 namespace meshless {
 
 using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
+/// A traction on a cut's lips [Pa] from the point [m] and the lip's outward unit normal.
+using LipTraction = std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& outward_normal)>;
 
 enum class LinearSolverKind {
-  automatic,  ///< direct when the estimated peak memory of the LU fits EfgOptions::direct_solver_memory_fraction
-  direct,     ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
-  iterative,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (for clouds too large to factorise)
+  automatic,        ///< direct when the estimated peak memory of the LU fits the available memory, else amg_krylov
+  direct,           ///< UMFPACK sparse LU; works for the non-symmetric tangent (k != 0)
+  amg_krylov,       ///< PETSc Krylov method + algebraic multigrid (EfgOptions::amg_options); needs PETSc initialised
+  jacobi_bicgstab,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (the earlier fallback, kept for comparison)
 };
 
 /// Solver knobs with defaults; see docs/MESHLESS.md for the reasons behind each.
@@ -35,9 +41,13 @@ struct EfgOptions {
   bool variationally_consistent = true;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   /// automatic: factorise when the estimated peak memory of the LU (meshless/direct_solver_estimate.hpp, AMD on
-  /// the node pairs) is below this fraction of the physical memory; the rest is left for the model's own tables.
-  double direct_solver_memory_fraction = 0.5;
-  /// Relative residual of each BiCGSTAB solve. Newton's own test decides convergence, so a looser solve only
+  /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
+  /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.
+  double direct_solver_memory_fraction = 0.8;
+  /// PETSc options of the amg_krylov solver (its own options database; docs/MESHLESS.md §2 has the measurements
+  /// behind the choice).
+  std::string amg_options = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side right -pc_type ml";
+  /// Relative residual of each iterative solve. Newton's own test decides convergence, so a looser solve only
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.
   double iterative_tolerance = 1e-9;
   int iterative_max_iterations = 20000;
@@ -68,11 +78,23 @@ struct EfgProblem {
   /// Steps at which output_results() writes (the last step is always written). Empty -> every step.
   int output_every = 1;
 
+  /// The incision (paper §4) when the body is cut: the shape functions are made discontinuous across it by
+  /// `cut_treatment` (meshless/cut_weights.hpp), the background cells and boundary faces it crosses are split, and
+  /// its two lips become boundary (traction-free unless lip_traction is set).
+  std::optional<core::RuledSurface> cut;
+  CutTreatment cut_treatment = CutTreatment::enrichment;
+  /// l of the enrichment's front transition [m] (meshless/cut_weights.hpp); 0 = the paper's phi as it stands.
+  double front_transition = 0.0;
+  /// Traction on the lips at full load (scaled by load_scale(t)); empty = traction-free, as an incision is.
+  /// Verification problems load them with sigma n.
+  LipTraction lip_traction;
+
   double alpha() const { return penalty_factor * material.K1 / node_spacing; }
 };
 
 /// The load case of a config: meshless_mesh of the geometry, zero u-bar on the fixed faces, uniform traction
-/// force(t) / A_patch on the load faces (A_patch = area of the load-tagged faces of the meshless mesh).
+/// force(t) / A_patch on the load faces (core::load_program), and the geometry's cut (if any) with the case's
+/// treatment (/meshless/enrichment) and front transition (/meshless/front_transition).
 EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g);
 
 }  // namespace meshless

@@ -2,21 +2,58 @@
 // Integration points of the EFG weak form with their MLS shape functions, tabulated once (the node cloud and
 // the background cells do not move: small-strain kinematics, eq. 17), so every Newton iteration of every time
 // step reuses phi and dphi instead of re-solving the moment matrix of eq. 3.
+//
+// With a cut (paper §4) the background cells and the boundary faces that the cut crosses are split into pieces
+// (meshless/cut_quadrature.hpp), and both lips of the cut get boundary points of their own: the divergence
+// identity, the VCI correction and any lip traction integrate over them like over the outer surface.
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
+#include "core/ruled_surface.hpp"
 #include "core/tet_mesh.hpp"
 
 namespace meshless {
 
 class MlsShapeFunctions;
 
+/// A set of integration points before their shape functions are known.
+struct QuadraturePoints {
+  core::PointMatrix points;        ///< #q by 3 [m]
+  Eigen::VectorXd weights;         ///< #q quadrature weights [m^3] (volume) or [m^2] (surface)
+  /// #q: the background tetrahedron (volume points and lip points) or the boundary face (outer-surface points)
+  std::vector<int> cells;
+  /// #q: the side of the cut a point on it is evaluated on (+1 or -1: a lip point), 0 elsewhere
+  std::vector<std::int8_t> sides;
+  Eigen::Matrix3Xd normals;        ///< 3 by #q outward unit normals (surface points); 3 by 0 for volume points
+
+  int size() const { return static_cast<int>(weights.size()); }
+  bool on_lip(int q) const { return sides[q] != 0; }
+  /// Append another set (both volume, or both surface).
+  void append(const QuadraturePoints& other);
+};
+
+/// Gauss points of every background tetrahedron (rule of `order`, see tet_rule()); a tetrahedron that `cut`
+/// crosses (when not null) is split along the crossing panels' planes and each piece gets the rule.
+QuadraturePoints volume_quadrature(const core::TetMesh& mesh, int order, const core::RuledSurface* cut = nullptr);
+
+/// Gauss points of every boundary triangle (rule of `order`, see triangle_rule()), with the face's outward normal;
+/// a face that `cut` crosses (when not null) is split along the crossing panels' planes.
+QuadraturePoints boundary_quadrature(const core::TetMesh& mesh, int order, const core::RuledSurface* cut = nullptr);
+
+/// Gauss points on both lips of the cut inside the body (the cut clipped to every background tetrahedron it
+/// crosses), each point twice: on the s > 0 lip (side +1, outward normal -n) and on the s < 0 lip (side -1,
+/// outward normal +n), n the panel normal; cells = the tetrahedron.
+QuadraturePoints lip_quadrature(const core::TetMesh& mesh, int order, const core::RuledSurface& cut);
+
 /// Shape-function values at a set of points, in compressed-row layout: the nodes of point q are
 /// nodes[offsets[q] .. offsets[q+1]), ascending, with phi and dphi in the same slots.
 struct ShapeTable {
   core::PointMatrix points;     ///< #q by 3 [m]
   Eigen::VectorXd weights;      ///< #q quadrature weights [m^3] (volume) or [m^2] (surface)
-  std::vector<int> cells;       ///< #q: background tetrahedron (volume) or boundary face (surface) index
+  std::vector<int> cells;       ///< #q, as QuadraturePoints::cells
+  std::vector<std::int8_t> sides;  ///< #q, as QuadraturePoints::sides
+  Eigen::Matrix3Xd normals;     ///< as QuadraturePoints::normals
   std::vector<int> offsets;     ///< #q + 1
   std::vector<int> nodes;       ///< offsets.back()
   std::vector<double> phi;      ///< offsets.back(), phi_i(X_q)
@@ -26,21 +63,17 @@ struct ShapeTable {
   int begin(int q) const { return offsets[q]; }
   int end(int q) const { return offsets[q + 1]; }
   bool has_gradients() const { return dphi.cols() > 0; }
+  bool on_lip(int q) const { return sides[q] != 0; }
 };
 
-/// Gauss points of every background tetrahedron (rule of `order`, see tet_rule()).
-/// @param[out] points #q by 3, weights #q (|J| included), cells #q
-void tet_quadrature_points(const core::TetMesh& mesh, int order, core::PointMatrix* points,
-                           Eigen::VectorXd* weights, std::vector<int>* cells);
-
-/// Gauss points of every boundary triangle (rule of `order`, see triangle_rule()).
-void face_quadrature_points(const core::TetMesh& mesh, int order, core::PointMatrix* points,
-                            Eigen::VectorXd* weights, std::vector<int>* faces);
-
-/// Evaluate the MLS shape functions at every point (in parallel when OpenMP is available).
+/// Evaluate the MLS shape functions at every point (in parallel when OpenMP is available), each with its side hint.
 /// @throws SingularMomentMatrix (from MlsShapeFunctions) naming the first failing point and its neighbour count
-ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, core::PointMatrix points, Eigen::VectorXd weights,
-                                    std::vector<int> cells, bool with_gradients);
+ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients);
+
+/// Same, but point q copies row reuse[q] of `previous` instead of evaluating when reuse[q] >= 0 (a local update
+/// after the cut advanced: only the points whose shape functions changed are evaluated again).
+ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients,
+                                    const ShapeTable& previous, const std::vector<int>& reuse);
 
 /// The transpose of a ShapeTable's node lists: for node i, the table slots (entries of nodes/phi/dphi) where it
 /// appears, and the point each slot belongs to. Lets assembly run row by row (one node's equations at a time),

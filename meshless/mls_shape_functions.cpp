@@ -53,13 +53,13 @@ MlsShapeFunctions::MlsShapeFunctions(const core::PointMatrix& nodes, const Suppo
     throw std::invalid_argument("MlsShapeFunctions: the search was built on a different node matrix");
 }
 
-MlsEvaluation MlsShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients) const {
+MlsEvaluation MlsShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients, int side) const {
   MlsEvaluation out;
-  evaluate(x, with_gradients, &out);
+  evaluate(x, with_gradients, &out, side);
   return out;
 }
 
-void MlsShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients, MlsEvaluation* out) const {
+void MlsShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients, MlsEvaluation* out, int side) const {
   if (!x.allFinite())
     throw std::invalid_argument(
         fmt::format("MlsShapeFunctions::evaluate: non-finite point ({}, {}, {})", x.x(), x.y(), x.z()));
@@ -85,7 +85,7 @@ void MlsShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients, 
     }
     if (modifier_) {
       Eigen::Vector3d grad_h = Eigen::Vector3d::Zero();
-      const double h = modifier_(hit.node, x, with_gradients ? &grad_h : nullptr);
+      const double h = modifier_(hit.node, x, side, with_gradients ? &grad_h : nullptr);
       if (!(h >= 0.0 && h <= 1.0) || !grad_h.allFinite())
         throw std::domain_error(fmt::format(
             "MlsShapeFunctions: weight modifier returned h = {} for node {} at ({:.6g}, {:.6g}, {:.6g}) mm; "

@@ -53,10 +53,12 @@ struct MlsOptions {
 };
 
 /// Optional per-node multiplier of the weight, h_i(X) in [0, 1] (paper §4: the enrichment/visibility function
-/// of eqs. 29-32 multiplies w_i). Called as modifier(node, X, grad): return h_i(X) and, when grad is not
-/// null, write dh_i/dX [1/m] into *grad (grad is null when gradients are not requested, so skip that work). A
-/// C1 h_i >= 0 has zero gradient where it vanishes, which is why nodes with h_i(X) = 0 can be dropped.
-using WeightModifier = std::function<double(int node, const Eigen::Vector3d& x, Eigen::Vector3d* grad)>;
+/// of eqs. 29-32 multiplies w_i; meshless/cut_weights.hpp). Called as modifier(node, X, side, grad): return h_i(X)
+/// and, when grad is not null, write dh_i/dX [1/m] into *grad (grad is null when gradients are not requested, so
+/// skip that work). `side` is the evaluation's side hint (see MlsShapeFunctions::evaluate): +1 or -1 for a point
+/// that lies on a cut and is evaluated as the limit from that side, 0 otherwise. A C1 h_i >= 0 has zero gradient
+/// where it vanishes, which is why nodes with h_i(X) = 0 can be dropped.
+using WeightModifier = std::function<double(int node, const Eigen::Vector3d& x, int side, Eigen::Vector3d* grad)>;
 
 /// MLS shape functions with the linear basis P = [1, x, y, z] (eq. 1) and the cubic spline weight (eq. 8):
 ///   A(X) = sum_i w_i(X) p(X_i) p(X_i)^T                  (eq. 3)
@@ -83,16 +85,19 @@ class MlsShapeFunctions {
 
   /// Shape functions (and gradients if asked) at X.
   /// @param x evaluation point, metres
+  /// @param side handed to the weight modifier: +1 / -1 evaluates a point on a cut as the limit from that side
+  ///        (a lip); 0 lets the modifier decide from x
   /// @throws SingularMomentMatrix if A(X) is singular or ill-conditioned (see MlsOptions)
   /// @throws std::invalid_argument if x is not finite; std::domain_error if the modifier leaves [0, 1]
-  MlsEvaluation evaluate(const Eigen::Vector3d& x, bool with_gradients) const;
+  MlsEvaluation evaluate(const Eigen::Vector3d& x, bool with_gradients, int side = 0) const;
 
   /// Same, writing into `out` so that loops over quadrature points reuse its storage.
-  void evaluate(const Eigen::Vector3d& x, bool with_gradients, MlsEvaluation* out) const;
+  void evaluate(const Eigen::Vector3d& x, bool with_gradients, MlsEvaluation* out, int side = 0) const;
 
   /// Install (or, with an empty function, remove) the weight multiplier h_i(X); see WeightModifier.
   void set_weight_modifier(WeightModifier modifier) { modifier_ = std::move(modifier); }
   bool has_weight_modifier() const { return static_cast<bool>(modifier_); }
+  const WeightModifier& weight_modifier() const { return modifier_; }
 
   int num_nodes() const { return static_cast<int>(nodes_->rows()); }
   const MlsOptions& options() const { return options_; }

@@ -7,18 +7,6 @@
 
 namespace meshless {
 
-Eigen::Matrix<double, Eigen::Dynamic, 3> boundary_face_normals(const core::TetMesh& mesh) {
-  const int nf = static_cast<int>(mesh.boundary_faces.rows());
-  Eigen::Matrix<double, Eigen::Dynamic, 3> n(nf, 3);
-  for (int f = 0; f < nf; ++f) {
-    const Eigen::Vector3d a = mesh.vertices.row(mesh.boundary_faces(f, 0));
-    const Eigen::Vector3d b = mesh.vertices.row(mesh.boundary_faces(f, 1));
-    const Eigen::Vector3d c = mesh.vertices.row(mesh.boundary_faces(f, 2));
-    n.row(f) = (b - a).cross(c - a).normalized().transpose();
-  }
-  return n;
-}
-
 BoundaryTerms make_boundary_terms(const EfgProblem& problem, const ShapeTable& surface, double alpha) {
   const core::TetMesh& mesh = problem.mesh;
   const int nf = static_cast<int>(mesh.boundary_faces.rows());
@@ -40,9 +28,17 @@ BoundaryTerms make_boundary_terms(const EfgProblem& problem, const ShapeTable& s
   b.penalty_load = Eigen::VectorXd::Zero(3 * n);
   b.traction_load = Eigen::VectorXd::Zero(3 * n);
   for (int q = 0; q < surface.size(); ++q) {
-    const int f = surface.cells[q];
     const double w = surface.weights[q];
     const Eigen::Vector3d x = surface.points.row(q).transpose();
+    if (surface.on_lip(q)) {  // a lip of the cut: free, unless a verification problem loads it
+      if (problem.lip_traction) {
+        const Eigen::Vector3d t = problem.lip_traction(x, surface.normals.col(q));
+        for (int s = surface.begin(q); s < surface.end(q); ++s)
+          b.traction_load.segment<3>(3 * surface.nodes[s]) += w * surface.phi[s] * t;
+      }
+      continue;
+    }
+    const int f = surface.cells[q];
     if (role(problem.penalised_faces, core::FaceTag::fixed, f)) {
       b.penalty_weight[q] = alpha * w;  // eq. 23
       b.penalised_area += w;

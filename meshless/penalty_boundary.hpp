@@ -2,7 +2,7 @@
 // Boundary terms of the EFG weak form (eq. 19) on the tabulated boundary points:
 //  * penalty essential BC (eq. 23): K^alpha_ij = int_Gu phi_i alpha phi_j dGamma I3 and its load
 //    alpha int_Gu phi_i u-bar dGamma (the u-bar part of the last term of eq. 24);
-//  * traction (eq. 24): int_Gt phi_i t-bar dGamma.
+//  * traction (eq. 24): int_Gt phi_i t-bar dGamma (and, for verification, a traction on the lips of a cut).
 #include <Eigen/Core>
 #include <vector>
 
@@ -21,11 +21,9 @@ struct BoundaryTerms {
   double loaded_area = 0.0;             ///< [m^2]
 };
 
-/// Build the boundary terms from the face roles of `problem` (masks, or face_tags fixed/load).
-/// @param surface boundary points of every boundary face (cells = face index), with phi
+/// Build the boundary terms from the face roles of `problem` (masks, or face_tags fixed/load); lip points carry
+/// problem.lip_traction when it is set and nothing else.
+/// @param surface boundary points of the outer faces (cells = face index) and of the lips, with phi
 BoundaryTerms make_boundary_terms(const EfgProblem& problem, const ShapeTable& surface, double alpha);
-
-/// Outward unit normal of every boundary face (#F by 3), from the right-hand orientation of its vertices.
-Eigen::Matrix<double, Eigen::Dynamic, 3> boundary_face_normals(const core::TetMesh& mesh);
 
 }  // namespace meshless

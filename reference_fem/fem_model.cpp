@@ -24,7 +24,8 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
   p.threads = options.threads;
   ViscoelasticSolver solver(triangulation, p, conditions);
   solver.setup_system();
-  const SampleEvaluator samples(solver.mapping(), solver.dof_handler(), sample_points, options.sample_tolerance);
+  const SampleEvaluator samples(solver.mapping(), solver.dof_handler(), sample_points, options.sample_tolerance,
+                                options.cut);
 
   FemRunResult result;
   result.n_dofs = solver.dof_handler().n_dofs();
@@ -68,6 +69,7 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
   parameters.newton.max_iterations = c.fem.max_newton_iterations;
 
   FemRunOptions run = options;
+  if (!run.cut && geometry.cut) run.cut = &*geometry.cut;
   if (!(run.probe_radius > 0.0)) {
     run.probe_centre = geometry.load_centre;
     run.probe_radius = c.load.radius;

@@ -19,6 +19,8 @@ struct FemRunOptions {
   double sample_tolerance = 3e-3;  ///< [m] how far a sample may lie outside the faceted mesh
   unsigned int threads = 2;
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
+  /// When not null, samples behind the crack front are evaluated on the lip core::RuledSurface::side gives them.
+  const core::RuledSurface* cut = nullptr;
   /// When radius > 0, measure the strain within this ball at the last step (FemRunResult::probe_strain).
   Eigen::Vector3d probe_centre = Eigen::Vector3d::Zero();  ///< [m]
   double probe_radius = 0.0;                               ///< [m]

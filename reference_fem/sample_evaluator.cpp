@@ -26,10 +26,23 @@ Point<3> clamp_to_reference_tet(const Point<3>& p) {
   return Point<3>(lambda[1] / sum, lambda[2] / sum, lambda[3] / sum);
 }
 
+/// Whether `cell` may hold a point on lip `side` of the cut: no vertex (nor the centroid) lies behind the front on
+/// the other side. Vertices on the crack itself (duplicated, one per lip) do not decide.
+bool on_lip(const core::RuledSurface& cut, const typename Triangulation<3>::active_cell_iterator& cell, int side) {
+  constexpr double kOnCrack = 1e-6;  // [m] Gmsh puts the crack's nodes on its planes to round-off
+  auto other_side = [&](const Point<3>& p) {
+    const core::CutFrame f = cut.frame(Eigen::Vector3d(p[0], p[1], p[2]));
+    return f.behind_front && std::abs(f.s) > kOnCrack && (f.s > 0 ? 1 : -1) != side;
+  };
+  for (const unsigned int v : cell->vertex_indices())
+    if (other_side(cell->vertex(v))) return false;
+  return !other_side(cell->center());
+}
+
 }  // namespace
 
 SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>& dof_handler,
-                                 const Eigen::MatrixXd& points, double tolerance)
+                                 const Eigen::MatrixXd& points, double tolerance, const core::RuledSurface* cut)
     : dof_handler_(dof_handler) {
   const Triangulation<3>& tria = dof_handler.get_triangulation();
   GridTools::Cache<3, 3> cache(tria, mapping);
@@ -38,10 +51,18 @@ SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>&
     const Point<3> p(points(i, 0), points(i, 1), points(i, 2));
     Location location;
     double offset = 0.0;
+    // Next to a crack the point belongs to one lip: the shared rule (core::RuledSurface::side).
+    const Eigen::Vector3d x(p[0], p[1], p[2]);
+    const bool lip_rule = cut && cut->frame(x).behind_front;
+    const int side = lip_rule ? cut->side(x) : 0;
+    auto allowed = [&](const typename Triangulation<3>::active_cell_iterator& cell) {
+      return !lip_rule || on_lip(*cut, cell, side);
+    };
     auto found = GridTools::find_active_cell_around_point(cache, p, hint, {}, 1e-10);
     // deal.II may hand back its best guess even when the point is not in that cell (e.g. next to a crack,
     // where two vertices share a position), so check the reference coordinates ourselves.
-    if (found.first != tria.end() && found.first->reference_cell().contains_point(found.second, 1e-8)) {
+    if (found.first != tria.end() && found.first->reference_cell().contains_point(found.second, 1e-8) &&
+        allowed(found.first)) {
       location.unit_point = found.second;
       hint = found.first;
     } else {
@@ -65,6 +86,7 @@ SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>&
             candidates.insert(neighbour);
       double best = std::numeric_limits<double>::max();
       for (const auto& cell : candidates) {
+        if (!allowed(cell)) continue;
         const Point<3> unit = clamp_to_reference_tet(mapping.transform_real_to_unit_cell(cell, p));
         const double d = mapping.transform_unit_to_real_cell(cell, unit).distance(p);
         if (d < best) {
@@ -76,8 +98,8 @@ SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>&
       location.unit_point = found.second;
       if (offset > tolerance) {
         std::ostringstream msg;
-        msg << "SampleEvaluator: point " << i << " lies " << offset * 1e3 << " mm outside the FEM mesh (tolerance "
-            << tolerance * 1e3 << " mm)";
+        msg << "SampleEvaluator: point " << i << " lies " << offset * 1e3 << " mm outside the FEM mesh"
+            << (lip_rule ? " on its lip of the cut" : "") << " (tolerance " << tolerance * 1e3 << " mm)";
         throw std::runtime_error(msg.str());
       }
     }

@@ -9,6 +9,8 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "core/ruled_surface.hpp"
+
 namespace reference_fem {
 
 class SampleEvaluator {
@@ -16,8 +18,10 @@ class SampleEvaluator {
   /// Locate every point once (cell + reference coordinates, reusing the previous cell as a hint).
   /// @param points  #points by 3 [m]
   /// @param tolerance  largest distance [m] a point may lie outside the mesh; farther throws
+  /// @param cut  when not null, a point behind the crack front is located on the lip core::RuledSurface::side
+  ///             gives it (the rule the meshless model uses too): in a cell with no vertex on the other side
   SampleEvaluator(const dealii::Mapping<3>& mapping, const dealii::DoFHandler<3>& dof_handler,
-                  const Eigen::MatrixXd& points, double tolerance);
+                  const Eigen::MatrixXd& points, double tolerance, const core::RuledSurface* cut = nullptr);
 
   /// #points by 3 displacement [m] of the FE field `solution`.
   Eigen::MatrixXd evaluate(const dealii::Vector<double>& solution) const;

@@ -10,6 +10,7 @@ PACKAGES=(
   libnanoflann-dev libcli11-dev libsuitesparse-dev
   libssl-dev             # SHA-256 of the case and of the surrogate file (OpenSSL::Crypto)
   libopenblas0-pthread   # fast BLAS for UMFPACK (both models factorise with it)
+  libpetsc-real-dev      # PETSc with hypre and Trilinos ML: the EFG model's AMG-Krylov solve (also a deal.II dependency)
   python3 python3-matplotlib
 )
 

@@ -53,10 +53,11 @@ class BadCase : public ::testing::Test {
   }
   std::string write_case(const json& document) { return write("case.json", document.dump(2)); }
 
-  /// Run `tissue case mesh` on `config` and check the error contract.
-  void expect_error(const std::string& config, const std::vector<std::string>& fragments) {
+  /// Run `tissue <command>` (default: case mesh) on `config` and check the error contract.
+  void expect_error(const std::string& config, const std::vector<std::string>& fragments,
+                    const std::string& command = "case mesh") {
     const fs::path out = dir_ / "results" / "out";
-    const RunResult r = run("case mesh " + config + " --out " + out.string());
+    const RunResult r = run(command + " " + config + " --out " + out.string());
     EXPECT_NE(r.exit_code, 0) << r.output;
     EXPECT_NE(r.output.find("error: "), std::string::npos) << r.output;
     EXPECT_NE(r.output.find(fs::path(config).filename().string()), std::string::npos)
@@ -156,6 +157,45 @@ TEST_F(BadCase, CutDirectionPointingOutOfTheBody) {
   expect_error(write_case(base_), {"/cut/direction", "into the tissue"});
 }
 
+TEST_F(BadCase, CutThatCrossesItself) {
+  // A Z seen along the cut direction: its first and third segments cross.
+  base_["cut"] = {{"polyline", {{-73.0, -20.0, 20.0}, {-73.0, 20.0, 50.0}, {-73.0, 20.0, 20.0}, {-73.0, -20.0, 50.0}}},
+                  {"depth", 10.0},
+                  {"direction", {1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/polyline", "crosses itself"});
+}
+
+TEST_F(BadCase, CutOfZeroLength) {
+  base_["cut"] = {{"polyline", {{-71.0, 0.0, 40.0}, {-71.0, 0.0, 40.0}}}, {"depth", 10.0}, {"direction", {1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/polyline", "points 0 and 1 coincide"});
+}
+
+TEST_F(BadCase, CutDepthOfZero) {
+  base_["cut"] = {{"polyline", {{-71.0, -25.0, 40.0}, {-71.0, 25.0, 40.0}}}, {"depth", 0.0}, {"direction", {1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/depth", "expected a number > 0", "got 0"});
+}
+
+TEST_F(BadCase, CutDeeperThanTheBody) {
+  base_["cut"] = {{"polyline", {{-71.0, -25.0, 40.0}, {-71.0, 25.0, 40.0}}}, {"depth", 200.0}, {"direction", {1.0, 0.0, 0.0}}};
+  expect_error(write_case(base_), {"/cut/depth", "leaves the body", "thick along the cut direction"});
+}
+
+TEST_F(BadCase, CutInZeroSteps) {
+  base_["cut"] = {{"polyline", {{-71.0, -25.0, 40.0}, {-71.0, 25.0, 40.0}}}, {"depth", 20.0}, {"direction", {1.0, 0.0, 0.0}},
+                  {"steps", 0}};
+  expect_error(write_case(base_), {"/cut/steps", "expected an integer in [1, 100000]", "got 0"});
+}
+
+TEST_F(BadCase, ProgressiveCutInMoreIncrementsThanTimeSteps) {
+  base_["cut"] = {{"polyline", {{-71.0, -25.0, 40.0}, {-71.0, 25.0, 40.0}}}, {"depth", 20.0}, {"direction", {1.0, 0.0, 0.0}},
+                  {"steps", 20}};
+  expect_error(write_case(base_), {"/cut/steps", "at most 10 increments"}, "cut");
+}
+
+TEST_F(BadCase, ProgressiveCutWithoutACut) {
+  expect_error(write_case(base_), {"/cut", "`tissue cut` advances the case's incision"}, "cut");
+}
+
 TEST_F(BadCase, ZeroTimeSteps) {
   base_["time"]["steps"] = 0;
   expect_error(write_case(base_), {"/time/steps", "expected an integer in [1, 100000]", "got 0"});
@@ -202,7 +242,8 @@ TEST(ShippedCases, CaseMeshWritesVtuAndTheConfig) {
 }
 
 TEST(Cli, HelpOnEverySubcommand) {
-  for (const char* sub : {"", "case", "case check", "case mesh"}) {
+  for (const char* sub : {"", "case", "case check", "case mesh", "solve", "solve fem", "solve meshless", "cut", "verify",
+                          "verify fem", "verify meshless"}) {
     const RunResult r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub << "\n" << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;

@@ -87,9 +87,10 @@ TEST(BuiltinLung, RegionsAreTaggedConsistently) {
 }
 
 TEST(BuiltinLung, ImprintedRegionsDoNotDependOnTheMeshSize) {
-  // The fixed ball and the load ball are imprinted on the body, so every FEM mesh conforms to them: the
-  // load patch is the same surface at every mesh size, and the fixed area converges with the faceting of
-  // its boundary circle (to within a few per cent even at 16 mm), instead of jumping by whole faces.
+  // The fixed ball and the load ball are imprinted on the body, so every FEM mesh conforms to them: both areas
+  // change with the mesh only through the faceting of the curved patch (elements of load_patch_refinement * h
+  // under the probe: 8 and 4.5 mm here), instead of jumping by whole faces. Measured: 423.2 / 443.2 mm^2 load,
+  // 3824 / 3840 mm^2 fixed.
   const core::Case c = core::load_case(kConfigDir + "/lung_small.json");
   core::GeometryOptions options;
   options.build_node_cloud = false;
@@ -102,10 +103,12 @@ TEST(BuiltinLung, ImprintedRegionsDoNotDependOnTheMeshSize) {
   }
   std::cout << "load patch " << load_area[0] * 1e6 << " / " << load_area[1] * 1e6 << " mm^2, fixed "
             << fixed_area[0] * 1e6 << " / " << fixed_area[1] * 1e6 << " mm^2 at 16 / 9 mm\n";
-  EXPECT_NEAR(load_area[0], load_area[1], 0.01 * load_area[1]);
-  EXPECT_NEAR(fixed_area[0], fixed_area[1], 0.05 * fixed_area[1]);
-  // A disc of radius r on a gently curved surface: close to pi r^2.
-  EXPECT_NEAR(load_area[1], M_PI * c.load.radius * c.load.radius, 0.06 * M_PI * c.load.radius * c.load.radius);
+  EXPECT_NEAR(load_area[0], load_area[1], 0.05 * load_area[1]);
+  EXPECT_NEAR(fixed_area[0], fixed_area[1], 0.01 * fixed_area[1]);
+  // A disc of radius r on a gently curved surface: close to pi r^2 (2.0 % below it at 9 mm, 6.5 % at 16 mm).
+  const double disc = M_PI * c.load.radius * c.load.radius;
+  EXPECT_NEAR(load_area[1], disc, 0.025 * disc);
+  EXPECT_GT(disc - load_area[0], 2.5 * (disc - load_area[1])) << "the faceting error should fall as h^2";
 }
 
 TEST(BuiltinLung, SamplePointsAndMeshesAreIdenticalAcrossRuns) {
@@ -137,12 +140,12 @@ TEST(BuiltinLung, CutIsSnappedToTheSurfaceAsARuledSurface) {
   EXPECT_NEAR(g.cut->area(), expected, 1e-12);
   // Points on either side of a panel have opposite signs of s; the mid-panel point has s = 0.
   const Eigen::Vector3d mid = 0.5 * (g.cut->top()[0] + g.cut->top()[1]) + 0.5 * c.cut->depth * c.cut->direction;
-  const core::CutCoordinates on = g.cut->coordinates(mid, 0);
+  const core::CutFrame on = g.cut->frame(mid);
   EXPECT_NEAR(on.s, 0.0, 1e-12);
   EXPECT_NEAR(on.depth, 0.5 * c.cut->depth, 1e-12);
   const Eigen::Vector3d n = g.cut->panel_normal(0);
-  EXPECT_GT(g.cut->coordinates(mid + 1e-3 * n, 0).s, 0.0);
-  EXPECT_LT(g.cut->coordinates(mid - 1e-3 * n, 0).s, 0.0);
+  EXPECT_GT(g.cut->frame(mid + 1e-3 * n).s, 0.0);
+  EXPECT_LT(g.cut->frame(mid - 1e-3 * n).s, 0.0);
   EXPECT_NEAR(g.cut->distance(mid + 2e-3 * n), 2e-3, 1e-12);
 }
 

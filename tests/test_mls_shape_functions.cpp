@@ -368,7 +368,7 @@ TEST(MlsShapeFunctions, ModifierHidesNodesAcrossACut) {
   const core::PointMatrix& nodes = cloud->nodes;
   int calls_with_grad = 0;
   // Nodes beyond the plane x = cut are invisible from points before it (a crude visibility criterion).
-  cloud->mls.set_weight_modifier([&](int node, const Eigen::Vector3d& x, Eigen::Vector3d* grad) {
+  cloud->mls.set_weight_modifier([&](int node, const Eigen::Vector3d& x, int, Eigen::Vector3d* grad) {
     if (grad != nullptr) {
       grad->setZero();
       ++calls_with_grad;
@@ -410,7 +410,7 @@ TEST(MlsShapeFunctions, SmoothModifierGradientsMatchFiniteDifferences) {
   auto cloud = std::make_unique<Cloud>(make_grid(11, kSpacing, 0.4, 2024));
   const core::PointMatrix& nodes = cloud->nodes;
   // h_i(X) = 0.55 + 0.45 sin(40 X.x + 7 node_x) cos(30 X.z): smooth, in [0.1, 1], differs from node to node.
-  cloud->mls.set_weight_modifier([&](int node, const Eigen::Vector3d& x, Eigen::Vector3d* grad) {
+  cloud->mls.set_weight_modifier([&](int node, const Eigen::Vector3d& x, int, Eigen::Vector3d* grad) {
     const double a = 40.0 * x.x() + 7.0 * nodes(node, 0) / kSpacing, b = 30.0 * x.z();
     if (grad != nullptr)
       *grad = Eigen::Vector3d(0.45 * 40.0 * std::cos(a) * std::cos(b), 0.0,
@@ -426,9 +426,9 @@ TEST(MlsShapeFunctions, SmoothModifierGradientsMatchFiniteDifferences) {
 
 TEST(MlsShapeFunctions, ModifierOutsideUnitIntervalIsRejected) {
   auto cloud = std::make_unique<Cloud>(make_grid(11, kSpacing, 0.0, 0));
-  cloud->mls.set_weight_modifier([](int, const Eigen::Vector3d&, Eigen::Vector3d*) { return 1.5; });
+  cloud->mls.set_weight_modifier([](int, const Eigen::Vector3d&, int, Eigen::Vector3d*) { return 1.5; });
   EXPECT_THROW((void)cloud->mls.evaluate(Eigen::Vector3d(0.05, 0.05, 0.05), false), std::domain_error);
-  cloud->mls.set_weight_modifier([](int, const Eigen::Vector3d&, Eigen::Vector3d*) { return NAN; });
+  cloud->mls.set_weight_modifier([](int, const Eigen::Vector3d&, int, Eigen::Vector3d*) { return NAN; });
   EXPECT_THROW((void)cloud->mls.evaluate(Eigen::Vector3d(0.05, 0.05, 0.05), false), std::domain_error);
 }
 

@@ -1,0 +1,37 @@
+#include "experiments/compare_command.hpp"
+
+#include "experiments/compare.hpp"
+#include "experiments/progress.hpp"
+
+namespace experiments {
+
+void add_compare_command(CLI::App& app) {
+  static std::string config;
+  static CompareOptions options;
+  static double edge_mm = -1.0, cut_mm = -1.0;
+  static bool no_plot = false;
+  auto* cmd = app.add_subcommand(
+      "compare",
+      "Run the FEM reference and both meshless variants (enrichment = proposed, visibility = baseline) on one case "
+      "and compare them at the same samples: case.json, samples.csv, summary.json (eq. 34 RMSE, with and without "
+      "flagged samples, the reference's error bar, phase times), table.md, radar.png, VTU (docs/EXPERIMENTS.md)");
+  cmd->add_option("CONFIG", config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
+  cmd->add_option("--out", options.out_dir, "Output folder (written atomically)")->required();
+  cmd->add_option("--edge-distance", edge_mm,
+                  "Flag samples closer than this to the load-patch circle [mm] (default: load radius / 4)");
+  cmd->add_option("--cut-distance", cut_mm,
+                  "Flag samples closer than this to the cut [mm] (default: meshless.node_spacing)");
+  cmd->add_option("--reference-error", options.reference_error_file,
+                  "`tissue verify fem` result (fem.json) holding a mesh study of this exact reference; the error "
+                  "bar is reported as unknown otherwise")
+      ->capture_default_str();
+  cmd->add_flag("--no-plot", no_plot, "Do not run scripts/plot_radar.py (no radar.png)");
+  cmd->callback([] {
+    if (edge_mm >= 0.0) options.patch_edge_distance = edge_mm * 1e-3;
+    if (cut_mm >= 0.0) options.cut_distance = cut_mm * 1e-3;
+    options.plot = !no_plot;
+    throw CommandResult{run_compare(config, options)};
+  });
+}
+
+}  // namespace experiments

@@ -1,0 +1,175 @@
+#include "meshless/amg_krylov_solver.hpp"
+
+#include <fmt/format.h>
+#include <petscksp.h>
+
+#include <chrono>
+#include <stdexcept>
+#include <type_traits>
+
+namespace meshless {
+
+static_assert(std::is_same_v<PetscInt, SparseMatrix::StorageIndex>,
+              "PETSc must use the index type of meshless::SparseMatrix to reference its arrays without a copy");
+static_assert(std::is_same_v<PetscScalar, double>, "PETSc must be built with real double scalars");
+
+namespace {
+
+/// Throws std::runtime_error with PETSc's own text for a non-zero error code.
+void check(PetscErrorCode code, const char* call) {
+  if (code == 0) return;
+  const char* text = nullptr;
+  PetscErrorMessage(code, &text, nullptr);
+  throw std::runtime_error(fmt::format("PETSc: {} failed: {} (error {})", call, text ? text : "unknown", code));
+}
+
+}  // namespace
+
+bool petsc_initialised() { return PetscInitializeCalled == PETSC_TRUE && PetscFinalizeCalled == PETSC_FALSE; }
+
+struct AmgKrylovSolver::Petsc {
+  PetscOptions options = nullptr;
+  KSP ksp = nullptr;
+  Mat a = nullptr;
+  MatNullSpace rigid_body_modes = nullptr;
+  Vec coordinates = nullptr, b = nullptr, x = nullptr;
+  PetscInt n = 0;
+
+  ~Petsc() {
+    // Destruction must not throw; PETSc reports its own errors here. After PetscFinalize (an object that
+    // outlived MPI_InitFinalize) PETSc and MPI may not be called: leak rather than abort the program.
+    if (!petsc_initialised()) return;
+    if (ksp) KSPDestroy(&ksp);
+    if (rigid_body_modes) MatNullSpaceDestroy(&rigid_body_modes);
+    if (a) MatDestroy(&a);
+    if (coordinates) VecDestroy(&coordinates);
+    if (b) VecDestroy(&b);
+    if (x) VecDestroy(&x);
+    if (options) PetscOptionsDestroy(&options);
+  }
+};
+
+AmgKrylovSolver::AmgKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options,
+                                 double relative_tolerance, int max_iterations)
+    : petsc_(std::make_unique<Petsc>()) {
+  if (!petsc_initialised())
+    throw std::logic_error(
+        "AmgKrylovSolver: PETSc is not initialised; construct dealii::Utilities::MPI::MPI_InitFinalize (or call "
+        "PetscInitialize) at the start of main");
+  Petsc& p = *petsc_;
+  p.n = static_cast<PetscInt>(3 * nodes.rows());
+  check(PetscOptionsCreate(&p.options), "PetscOptionsCreate");
+  check(PetscOptionsInsertString(p.options, petsc_options.c_str()), "PetscOptionsInsertString");
+
+  // The rigid-body modes from the node positions, centred (PETSc orthonormalises them).
+  check(VecCreateSeq(PETSC_COMM_SELF, p.n, &p.coordinates), "VecCreateSeq");
+  check(VecSetBlockSize(p.coordinates, 3), "VecSetBlockSize");
+  {
+    const Eigen::RowVector3d centre = nodes.colwise().mean();
+    PetscScalar* c = nullptr;
+    check(VecGetArray(p.coordinates, &c), "VecGetArray");
+    for (Eigen::Index i = 0; i < nodes.rows(); ++i)
+      for (int d = 0; d < 3; ++d) c[3 * i + d] = nodes(i, d) - centre[d];
+    check(VecRestoreArray(p.coordinates, &c), "VecRestoreArray");
+  }
+  check(MatNullSpaceCreateRigidBody(p.coordinates, &p.rigid_body_modes), "MatNullSpaceCreateRigidBody");
+  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 3, p.n, nullptr, &p.b), "VecCreateSeqWithArray");
+  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 3, p.n, nullptr, &p.x), "VecCreateSeqWithArray");
+
+  check(KSPCreate(PETSC_COMM_SELF, &p.ksp), "KSPCreate");
+  check(PetscObjectSetOptions(reinterpret_cast<PetscObject>(p.ksp), p.options), "PetscObjectSetOptions");
+  PC pc = nullptr;
+  check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
+  check(PetscObjectSetOptions(reinterpret_cast<PetscObject>(pc), p.options), "PetscObjectSetOptions");
+  check(KSPSetTolerances(p.ksp, relative_tolerance, 0.0, PETSC_DEFAULT, max_iterations), "KSPSetTolerances");
+  check(KSPSetFromOptions(p.ksp), "KSPSetFromOptions (the options string)");
+}
+
+AmgKrylovSolver::~AmgKrylovSolver() = default;
+
+void AmgKrylovSolver::set_matrix(const SparseMatrix& a) {
+  Petsc& p = *petsc_;
+  if (a.rows() != p.n || a.cols() != p.n || !a.isCompressed())
+    throw std::invalid_argument(fmt::format("AmgKrylovSolver::set_matrix: expected a compressed {} x {} matrix, got {} x {}",
+                                            p.n, p.n, a.rows(), a.cols()));
+  const auto t0 = std::chrono::steady_clock::now();
+  if (p.a) check(MatDestroy(&p.a), "MatDestroy");
+  // PETSc's AIJ format is CSR: reference the arrays (a 32k-node tangent is 1.25 GB).
+  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, p.n, p.n, const_cast<PetscInt*>(a.outerIndexPtr()),
+                                  const_cast<PetscInt*>(a.innerIndexPtr()), const_cast<PetscScalar*>(a.valuePtr()),
+                                  &p.a),
+        "MatCreateSeqAIJWithArrays");
+  check(MatSetBlockSize(p.a, 3), "MatSetBlockSize");
+  check(MatSetNearNullSpace(p.a, p.rigid_body_modes), "MatSetNearNullSpace");
+  check(KSPSetOperators(p.ksp, p.a, p.a), "KSPSetOperators");
+  check(KSPSetUp(p.ksp), "KSPSetUp (building the multigrid hierarchy)");
+  setup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  // Levels and operator complexity of PETSc's own multigrid (GAMG); hypre and ML keep theirs inside.
+  levels_ = 0;
+  operator_complexity_ = 0.0;
+  PC pc = nullptr;
+  check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
+  PetscBool is_mg = PETSC_FALSE;
+  check(PetscObjectTypeCompareAny(reinterpret_cast<PetscObject>(pc), &is_mg, PCGAMG, PCMG, PCML, ""),
+        "PetscObjectTypeCompareAny");
+  if (is_mg) {
+    PetscInt nlevels = 0;
+    check(PCMGGetLevels(pc, &nlevels), "PCMGGetLevels");
+    double total = 0.0, fine = 0.0;
+    for (PetscInt l = 0; l < nlevels; ++l) {
+      KSP smoother = nullptr;
+      Mat op = nullptr;
+      check(PCMGGetSmoother(pc, l, &smoother), "PCMGGetSmoother");
+      check(KSPGetOperators(smoother, &op, nullptr), "KSPGetOperators");
+      MatInfo info;
+      check(MatGetInfo(op, MAT_LOCAL, &info), "MatGetInfo");
+      total += info.nz_used;
+      if (l == nlevels - 1) fine = info.nz_used;
+    }
+    levels_ = static_cast<int>(nlevels);
+    operator_complexity_ = fine > 0.0 ? total / fine : 0.0;
+  }
+}
+
+Eigen::VectorXd AmgKrylovSolver::solve(const Eigen::VectorXd& b) {
+  Petsc& p = *petsc_;
+  if (!p.a) throw std::logic_error("AmgKrylovSolver::solve before set_matrix");
+  if (b.size() != p.n) throw std::invalid_argument("AmgKrylovSolver::solve: wrong right-hand side size");
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(p.n);
+  check(VecPlaceArray(p.b, b.data()), "VecPlaceArray");
+  check(VecPlaceArray(p.x, x.data()), "VecPlaceArray");
+  const PetscErrorCode solved = KSPSolve(p.ksp, p.b, p.x);
+  check(VecResetArray(p.b), "VecResetArray");
+  check(VecResetArray(p.x), "VecResetArray");
+  check(solved, "KSPSolve");
+  PetscInt its = 0;
+  KSPConvergedReason reason;
+  check(KSPGetIterationNumber(p.ksp, &its), "KSPGetIterationNumber");
+  check(KSPGetConvergedReason(p.ksp, &reason), "KSPGetConvergedReason");
+  last_iterations_ = static_cast<int>(its);
+  if (reason < 0) {
+    PetscReal residual = 0.0;
+    KSPGetResidualNorm(p.ksp, &residual);
+    throw std::runtime_error(fmt::format(
+        "{} did not converge: {} after {} iterations (residual {:.3e}, |b| = {:.3e}); raise "
+        "iterative_max_iterations, or use the direct solver if the LU fits in memory",
+        description(), KSPConvergedReasons[reason], its, residual, b.norm()));
+  }
+  return x;
+}
+
+std::string AmgKrylovSolver::description() const {
+  const Petsc& p = *petsc_;
+  KSPType ksp_type = nullptr;
+  PCType pc_type = nullptr;
+  PC pc = nullptr;
+  KSPGetType(p.ksp, &ksp_type);
+  KSPGetPC(p.ksp, &pc);
+  PCGetType(pc, &pc_type);
+  std::string s = fmt::format("PETSc {} + {}", ksp_type ? ksp_type : "?", pc_type ? pc_type : "?");
+  if (levels_ > 0) s += fmt::format(" ({} levels, operator complexity {:.2f})", levels_, operator_complexity_);
+  return s;
+}
+
+}  // namespace meshless

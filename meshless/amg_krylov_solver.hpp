@@ -1,0 +1,65 @@
+#pragma once
+// A Krylov solve of the EFG tangent preconditioned by algebraic multigrid, through PETSc (KSP + PC): PETSc's
+// smoothed aggregation (GAMG), hypre's BoomerAMG or Trilinos ML, chosen by a PETSc options string. The six
+// rigid-body modes of the node cloud are the near-null space the aggregation must reproduce, and the 3 x 3
+// node blocks are the matrix's block size. PETSc stays out of this header.
+//
+// PETSc (and MPI) must be initialised before the first solver is constructed and finalised after the last
+// one is destroyed: dealii::Utilities::MPI::MPI_InitFinalize in main does both. Serial only
+// (PETSC_COMM_SELF). Not thread-safe; the PETSc calls themselves run on one thread. A solver destroyed after
+// PETSc was finalised releases nothing (its PETSc objects leak) rather than call PETSc and abort.
+#include <Eigen/Core>
+#include <memory>
+#include <string>
+
+#include "core/tet_mesh.hpp"
+#include "meshless/nodal_sparsity.hpp"
+
+namespace meshless {
+
+/// True once PETSc is initialised in this process (PetscInitialize or MPI_InitFinalize).
+bool petsc_initialised();
+
+class AmgKrylovSolver {
+ public:
+  /// @param nodes #nodes by 3 [m]: unknowns 3i..3i+2 belong to node i; they give the rigid-body modes.
+  ///        Copied.
+  /// @param petsc_options PETSc options (e.g. "-ksp_type gmres -pc_type gamg"), applied to this solver
+  ///        alone (its own options database, not the global one). The defaults are in EfgOptions.
+  /// @param relative_tolerance, max_iterations  stopping test of each solve (||r|| <= tol ||b||), set
+  ///        before the options string, which may override them.
+  /// Throws std::logic_error when PETSc is not initialised, std::runtime_error when PETSc rejects an option.
+  AmgKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,
+                  int max_iterations);
+  ~AmgKrylovSolver();
+  AmgKrylovSolver(const AmgKrylovSolver&) = delete;
+  AmgKrylovSolver& operator=(const AmgKrylovSolver&) = delete;
+
+  /// Use `a` (3N by 3N, compressed, sorted column indices) from now on and build the multigrid hierarchy for
+  /// it. The arrays of `a` are referenced, not copied: `a` must stay alive and unchanged (values, pattern)
+  /// until the next set_matrix() or the destructor.
+  void set_matrix(const SparseMatrix& a);
+  /// x with A x = b. Throws std::runtime_error naming PETSc's reason when the stopping test is not met.
+  Eigen::VectorXd solve(const Eigen::VectorXd& b);
+
+  int last_iterations() const { return last_iterations_; }
+  /// Seconds spent building the hierarchy in the last set_matrix().
+  double setup_seconds() const { return setup_seconds_; }
+  /// Multigrid levels and the operator complexity (sum of the non-zeros of all level operators / those of
+  /// A) of the last set-up; 0 when the preconditioner is not PETSc's own multigrid (hypre, ML report
+  /// theirs through their own options).
+  int levels() const { return levels_; }
+  double operator_complexity() const { return operator_complexity_; }
+  /// e.g. "GMRES(100) + GAMG (4 levels, operator complexity 1.21)".
+  std::string description() const;
+
+ private:
+  struct Petsc;
+  std::unique_ptr<Petsc> petsc_;
+  int last_iterations_ = 0;
+  double setup_seconds_ = 0.0;
+  int levels_ = 0;
+  double operator_complexity_ = 0.0;
+};
+
+}  // namespace meshless

@@ -1,0 +1,154 @@
+#include "meshless/efg_linear_solver.hpp"
+
+#include <fmt/format.h>
+
+#include <Eigen/IterativeLinearSolvers>
+#include <Eigen/UmfPackSupport>
+#include <chrono>
+#include <stdexcept>
+#include <utility>
+
+#include "meshless/available_memory.hpp"
+#include "meshless/direct_solver_estimate.hpp"
+
+namespace meshless {
+
+struct EfgLinearSolver::Umfpack {
+  // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
+  // row), where Eigen's SparseLU is an order of magnitude slower.
+  Eigen::UmfPackLU<UmfpackMatrix> lu;
+  /// umfpack_numeric's status. Eigen::UmfPackLU reports every non-zero status as NumericalIssue, but the
+  /// determinant under/overflow warnings come with a valid factorisation (UMFPACK user guide), so only the
+  /// singular-matrix warning and the errors are failures; the message names which one it was.
+  static bool factorised(long status) {
+    return status == UMFPACK_OK || status == UMFPACK_WARNING_determinant_underflow ||
+           status == UMFPACK_WARNING_determinant_overflow;
+  }
+  static std::string describe(long status) {
+    switch (status) {
+      case UMFPACK_WARNING_singular_matrix: return "numerically singular matrix";
+      case UMFPACK_ERROR_out_of_memory: return "UMFPACK ran out of memory";
+      default: return fmt::format("UMFPACK status {}", status);
+    }
+  }
+  bool analysed = false;
+  UmfpackMatrix colmajor;  // UmfPackLU keeps pointers into it: must outlive lu
+};
+
+struct EfgLinearSolver::JacobiBicgstab {
+  Eigen::BiCGSTAB<SparseMatrix, Eigen::DiagonalPreconditioner<double>> bicgstab;
+};
+
+EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity& sparsity,
+                                 const core::PointMatrix& nodes, std::string name)
+    : options_(options), name_(std::move(name)), kind_(options.linear_solver) {
+  if (kind_ == LinearSolverKind::automatic) {
+    const DirectSolverEstimate e = estimate_direct_solver_blocked(sparsity.node_pattern(), 3);
+    peak_memory_estimate_ = e.peak_memory_bytes;
+    flops_estimate_ = e.factorisation_flops;
+    available_memory_ = available_memory().bytes;
+    kind_ = e.peak_memory_bytes <= options_.direct_solver_memory_fraction * available_memory_
+                ? LinearSolverKind::direct
+                : LinearSolverKind::amg_krylov;
+  }
+  switch (kind_) {
+    case LinearSolverKind::direct: umfpack_ = std::make_unique<Umfpack>(); break;
+    case LinearSolverKind::amg_krylov:
+      if (!petsc_initialised())
+        throw std::logic_error(fmt::format(
+            "EfgModel '{}': the {} solver needs PETSc, which is not initialised in this program (construct "
+            "dealii::Utilities::MPI::MPI_InitFinalize at the start of main)",
+            name_,
+            options.linear_solver == LinearSolverKind::automatic
+                ? fmt::format("AMG-Krylov (chosen because the LU needs an estimated {:.3g} GB of {:.3g} GB "
+                              "available)",
+                              peak_memory_estimate_ / 1e9, available_memory_ / 1e9)
+                : std::string("AMG-Krylov")));
+      amg_ = std::make_unique<AmgKrylovSolver>(nodes, options_.amg_options, options_.iterative_tolerance,
+                                               options_.iterative_max_iterations);
+      break;
+    case LinearSolverKind::jacobi_bicgstab: jacobi_ = std::make_unique<JacobiBicgstab>(); break;
+    case LinearSolverKind::automatic: break;  // resolved above
+  }
+}
+
+EfgLinearSolver::~EfgLinearSolver() = default;
+
+std::string EfgLinearSolver::description() const {
+  switch (kind_) {
+    case LinearSolverKind::direct: return "UMFPACK (Eigen::UmfPackLU)";
+    case LinearSolverKind::amg_krylov: return amg_->description();
+    case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";
+    case LinearSolverKind::automatic: break;
+  }
+  return "?";
+}
+
+void EfgLinearSolver::prepare(const SparseMatrix& a) {
+  prepared_ = false;
+  const auto t0 = std::chrono::steady_clock::now();
+  switch (kind_) {
+    case LinearSolverKind::direct: {
+      Umfpack& f = *umfpack_;
+      f.colmajor = a;
+      if (!f.analysed) {
+        f.lu.analyzePattern(f.colmajor);  // the pattern never changes: order the columns once
+        if (f.lu.info() != Eigen::Success)
+          throw std::runtime_error(fmt::format("EfgModel '{}': UMFPACK symbolic analysis failed: {}", name_,
+                                               Umfpack::describe(f.lu.umfpackFactorizeReturncode())));
+        f.analysed = true;
+      }
+      f.lu.factorize(f.colmajor);
+      const long status = f.lu.umfpackFactorizeReturncode();
+      if (!Umfpack::factorised(status))
+        throw std::runtime_error(
+            fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", name_, Umfpack::describe(status)));
+      break;
+    }
+    case LinearSolverKind::amg_krylov: amg_->set_matrix(a); break;
+    case LinearSolverKind::jacobi_bicgstab: {
+      auto& s = jacobi_->bicgstab;
+      s.setTolerance(options_.iterative_tolerance);
+      s.setMaxIterations(options_.iterative_max_iterations);
+      s.compute(a);
+      break;
+    }
+    case LinearSolverKind::automatic: break;
+  }
+  prepare_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  prepared_ = true;
+}
+
+Eigen::VectorXd EfgLinearSolver::solve(const Eigen::VectorXd& rhs) {
+  if (!prepared_) throw std::logic_error("EfgLinearSolver::solve before prepare");
+  Eigen::VectorXd x;
+  last_iterations_ = 0;
+  switch (kind_) {
+    case LinearSolverKind::direct: x = umfpack_->lu.solve(rhs); break;
+    case LinearSolverKind::amg_krylov:
+      try {
+        x = amg_->solve(rhs);
+      } catch (const std::runtime_error& e) {
+        throw std::runtime_error(fmt::format("EfgModel '{}': {}", name_, e.what()));
+      }
+      last_iterations_ = amg_->last_iterations();
+      break;
+    case LinearSolverKind::jacobi_bicgstab: {
+      auto& s = jacobi_->bicgstab;
+      x = s.solve(rhs);
+      last_iterations_ = static_cast<int>(s.iterations());
+      if (s.info() != Eigen::Success)
+        throw std::runtime_error(fmt::format(
+            "EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g}); raise iterative_max_iterations "
+            "or use amg_krylov",
+            name_, s.iterations(), s.error()));
+      break;
+    }
+    case LinearSolverKind::automatic: break;
+  }
+  if (!x.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel '{}': the linear solve produced a non-finite update", name_));
+  return x;
+}
+
+}  // namespace meshless

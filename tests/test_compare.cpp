@@ -1,0 +1,256 @@
+// The comparator (`tissue compare`) on data with known answers: the eq. 34 RMSE, the flags of samples on the
+// load-patch edge or near the cut (distances in closed form), the reference's error bar from a mesh study,
+// summary.json / samples.csv / table.md, the sweep row, the radar script, and the command's error contract.
+// The whole command on the lung runs in the accuracy gates (test_compare_accuracy.cpp).
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "experiments/compare.hpp"
+#include "experiments/compare_metrics.hpp"
+#include "experiments/compare_subprocess.hpp"
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct RunResult {
+  int exit_code;
+  std::string output;
+};
+
+RunResult run(const std::string& args) {
+  FILE* pipe = popen((std::string(TISSUE_BINARY) + " " + args + " 2>&1").c_str(), "r");
+  std::string output;
+  std::array<char, 4096> buffer{};
+  while (pipe && fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
+  const int status = pipe ? pclose(pipe) : -1;
+  return {WEXITSTATUS(status), output};
+}
+
+fs::path temp_dir(const std::string& tag) {
+  const fs::path d = fs::temp_directory_path() / ("tissue_compare_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+TEST(CompareMetrics, RmseIsEq34) {
+  Eigen::MatrixXd u(3, 3), ref(3, 3);
+  ref << 1, 0, 0, 0, 2, 0, 0, 0, 3;
+  u << 1, 0, 3, 0, 2, 0, 4, 0, 3;  // errors 3, 0, 4
+  EXPECT_NEAR(experiments::rmse(u, ref), std::sqrt((9.0 + 0.0 + 16.0) / 3.0), 1e-15);
+  EXPECT_NEAR(experiments::rmse(u, ref, {true, true, false}), std::sqrt(9.0 / 2.0), 1e-15);
+  EXPECT_TRUE(std::isnan(experiments::rmse(u, ref, {false, false, false})));
+  EXPECT_NEAR(experiments::peak_magnitude(u), 5.0, 1e-15);  // |(4, 0, 3)|
+}
+
+TEST(CompareMetrics, FlagsSamplesOnThePatchEdgeAndNearTheCut) {
+  const Eigen::Vector3d centre(0, 0, 0);
+  const double radius = 0.012;
+  // Points in the plane z = 0 at 5, 11.5, 12, 14 and 30 mm from the centre.
+  Eigen::MatrixXd points(5, 3);
+  points << 0.005, 0, 0, 0, 0.0115, 0, -0.012, 0, 0, 0, -0.014, 0, 0.030, 0, 0;
+  // A vertical cut: the segment x = 0.030 ... 0.040 at y = 0.005, swept 20 mm down from z = 0.
+  const core::RuledSurface cut({{0.030, 0.005, 0.0}, {0.040, 0.005, 0.0}}, Eigen::Vector3d(0, 0, -1), 0.020);
+  experiments::SampleFlagRules rules;
+  rules.patch_edge_distance = 0.001;
+  rules.cut_distance = 0.010;
+  const auto d = experiments::diagnose_samples(points, centre, radius, cut, rules);
+  const std::array<double, 5> edge{0.007, 0.0005, 0.0, 0.002, 0.018};
+  for (std::size_t i = 0; i < 5; ++i) EXPECT_NEAR(d.edge_distance[i], edge[i], 1e-15) << i;
+  EXPECT_EQ(d.on_patch_edge, (std::vector<bool>{false, true, true, false, false}));
+  // Distance to the cut: the last point lies 5 mm from the cut plane, on the segment's end.
+  EXPECT_NEAR(*d.cut_distance[4], 0.005, 1e-15);
+  EXPECT_NEAR(*d.cut_distance[0], std::hypot(0.025, 0.005), 1e-15);
+  EXPECT_EQ(d.near_cut, (std::vector<bool>{false, false, false, false, true}));
+  EXPECT_EQ(d.num_flagged(), 3u);
+  EXPECT_EQ(d.unflagged_mask(), (std::vector<bool>{true, false, false, true, false}));
+
+  const auto no_cut = experiments::diagnose_samples(points, centre, radius, std::nullopt, rules);
+  EXPECT_FALSE(no_cut.cut_distance[4].has_value());
+  EXPECT_EQ(no_cut.num_flagged(), 2u);
+}
+
+/// A `tissue verify fem` result with one case studied at 20/16/12 mm.
+json study_json(const Eigen::MatrixXd& finest_mm, bool with_order) {
+  json levels = json::array();
+  for (double h : {20.0, 16.0, 12.0}) {
+    json samples = json::array();
+    for (Eigen::Index i = 0; i < finest_mm.rows(); ++i)
+      samples.push_back({finest_mm(i, 0) * (h == 12.0 ? 1.0 : 1.01), finest_mm(i, 1), finest_mm(i, 2)});
+    levels.push_back({{"mesh_size_mm", h}, {"sample_displacements_mm", samples}});
+  }
+  json richardson = with_order ? json{{"observed_order", 1.8}, {"estimated_error_of_finest_relative", 0.02}}
+                               : json{{"note", "differences not decreasing"}, {"assumed_order", 1.0},
+                                      {"estimated_error_of_finest_relative", 0.03}};
+  return {{"mesh_convergence", {{"lung_small", {{"levels", levels}, {"richardson", richardson}}}}}};
+}
+
+TEST(CompareMetrics, ReferenceErrorBarOnlyForTheStudiedSolve) {
+  Eigen::MatrixXd u_mm(2, 3);
+  u_mm << 3, 0, 4, 0, 0, 0;  // ‖U‖ = 5 mm over n = 2 samples
+  const json study = study_json(u_mm, true);
+  const auto bar = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.012, u_mm * 1e-3);
+  ASSERT_TRUE(bar.known) << bar.why_unknown;
+  EXPECT_NEAR(bar.relative, 0.02, 1e-15);
+  EXPECT_NEAR(bar.rms_mm, 0.02 * 5.0 / std::sqrt(2.0), 1e-12);
+  EXPECT_NE(bar.method.find("observed order 1.80"), std::string::npos) << bar.method;
+
+  const auto bound = experiments::reference_error_bar(study_json(u_mm, false), "fem.json", "lung_small", 0.012, u_mm * 1e-3);
+  ASSERT_TRUE(bound.known);
+  EXPECT_NEAR(bound.rms_mm, 0.03 * 5.0 / std::sqrt(2.0), 1e-12);
+  EXPECT_EQ(bound.method, "differences not decreasing");
+
+  auto b = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.024, u_mm * 1e-3);
+  EXPECT_FALSE(b.known);
+  EXPECT_NE(b.why_unknown.find("finest level is 12 mm; this reference is at 24 mm"), std::string::npos) << b.why_unknown;
+  b = experiments::reference_error_bar(study, "fem.json", "lung_large", 0.012, u_mm * 1e-3);
+  EXPECT_FALSE(b.known);
+  EXPECT_NE(b.why_unknown.find("no mesh study of case 'lung_large'"), std::string::npos) << b.why_unknown;
+  Eigen::MatrixXd other = u_mm * 1e-3;
+  other(0, 0) *= 1.001;
+  b = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.012, other);
+  EXPECT_FALSE(b.known);
+  EXPECT_NE(b.why_unknown.find("solved another case or build"), std::string::npos) << b.why_unknown;
+}
+
+experiments::ModelResult result_with(const Eigen::MatrixXd& u, double total_seconds) {
+  experiments::ModelResult r;
+  r.sample_displacements = u;
+  r.total_seconds = total_seconds;
+  r.setup_seconds = 0.5;
+  r.steps.push_back({1, 1.0, total_seconds, 0.25, 0.75, 3, {1e-9}, 0});
+  return r;
+}
+
+experiments::Comparison synthetic_comparison(bool identical_variants) {
+  experiments::Comparison c;
+  c.case_name = "synthetic";
+  c.config = "synthetic.json";
+  c.sample_points.resize(3, 3);
+  c.sample_points << 0.005, 0, 0, 0.012, 0, 0, 0.030, 0, 0;
+  Eigen::MatrixXd ref(3, 3), a(3, 3), b(3, 3);
+  ref << 0.004, 0, 0, 0.002, 0, 0, 0.001, 0, 0;  // peak 4 mm
+  a << 0.004, 0, 0.0003, 0.002, 0.0004, 0, 0.001, 0, 0;
+  b = identical_variants ? a : ref * 0.5;
+  c.reference = result_with(ref, 10.0);
+  c.models = {{"enrichment", result_with(a, 4.0)}, {"visibility", result_with(b, 5.0)}};
+  c.rules.patch_edge_distance = 0.001;
+  c.rules.cut_distance = 0.010;
+  c.diagnostics =
+      experiments::diagnose_samples(c.sample_points, Eigen::Vector3d::Zero(), 0.012, std::nullopt, c.rules);
+  c.geometry_seconds = 2.0;
+  c.has_cut = true;
+  return c;
+}
+
+TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {
+  const experiments::Comparison c = synthetic_comparison(false);
+  const json s = experiments::comparison_summary(c);
+  // enrichment errors: 0.3, 0.4, 0 mm; sample 1 sits on the patch edge (12 mm from the centre).
+  EXPECT_EQ(s["flagged_samples"], json::array({1}));
+  const json& e = s["models"]["enrichment"];
+  EXPECT_NEAR(e["rmse_mm"].get<double>(), std::sqrt((0.09 + 0.16) / 3.0), 1e-12);
+  EXPECT_NEAR(e["rmse_unflagged_mm"].get<double>(), std::sqrt(0.09 / 2.0), 1e-12);
+  EXPECT_NEAR(e["rmse_relative_to_peak"].get<double>(), std::sqrt((0.09 + 0.16) / 3.0) / 4.0, 1e-12);
+  EXPECT_EQ(e["n_unflagged"], 2);
+  EXPECT_NEAR(e["max_sample_error_mm"].get<double>(), 0.4, 1e-12);
+  EXPECT_NEAR(e["timings"]["assembly_seconds"].get<double>(), 0.25, 1e-15);
+  EXPECT_NEAR(e["timings"]["solve_seconds"].get<double>(), 0.75, 1e-15);
+  EXPECT_NEAR(e["timings"]["total_seconds"].get<double>(), 4.0, 1e-15);
+  EXPECT_TRUE(e["reference_error_bar_mm"].is_null());
+  // visibility = half the reference: errors 2, 1, 0.5 mm.
+  const double vis = std::sqrt((4.0 + 1.0 + 0.25) / 3.0);
+  EXPECT_NEAR(s["models"]["visibility"]["rmse_mm"].get<double>(), vis, 1e-12);
+  EXPECT_NEAR(s["difference_mm"].get<double>(), std::sqrt(0.25 / 3.0) - vis, 1e-12);
+  EXPECT_NEAR(s["reference"]["peak_sample_displacement_mm"].get<double>(), 4.0, 1e-12);
+  EXPECT_NEAR(s["geometry_seconds"].get<double>(), 2.0, 1e-15);
+  EXPECT_FALSE(s.contains("warning"));
+
+  // The sweep row takes its figures from the summary.
+  const auto& columns = experiments::compare_row_columns();
+  const auto values = experiments::compare_row_values(s);
+  ASSERT_EQ(columns.size(), values.size());
+  const auto value = [&](const std::string& name) {
+    return values[static_cast<std::size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin())];
+  };
+  EXPECT_NEAR(std::stod(value("enrichment_rmse_mm")), std::sqrt(0.25 / 3.0), 1e-8);
+  EXPECT_NEAR(std::stod(value("visibility_rmse_mm")), vis, 1e-8);
+  EXPECT_EQ(value("n_flagged"), "1");
+  EXPECT_EQ(value("fem_error_bar_mm"), "");
+  EXPECT_EQ(value("fem_seconds"), "10");
+}
+
+TEST(CompareSummary, IdenticalVariantsOnACutCaseAreReported) {
+  const json s = experiments::comparison_summary(synthetic_comparison(true));
+  ASSERT_TRUE(s.contains("warning"));
+  EXPECT_NE(s["warning"].get<std::string>().find("identical sample displacements"), std::string::npos);
+  EXPECT_EQ(s["variants_max_sample_difference_mm"].get<double>(), 0.0);
+}
+
+TEST(CompareSummary, SamplesCsvHasOneRowPerSampleAndModel) {
+  const experiments::Comparison c = synthetic_comparison(false);
+  std::istringstream csv(experiments::comparison_samples_csv(c));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line,
+            "sample,model,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,magnitude_mm,error_to_reference_mm,edge_distance_mm,"
+            "cut_distance_mm,on_patch_edge,near_cut,flagged");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 9u);
+  EXPECT_EQ(rows[0], "0,fem,5.000000,0.000000,0.000000,4,0,0,4,,7.000000,,0,0,0");
+  EXPECT_EQ(rows[1], "0,enrichment,5.000000,0.000000,0.000000,4,0,0.3,4.01123422,0.3,7.000000,,0,0,0");
+  EXPECT_EQ(rows[4], "1,enrichment,12.000000,0.000000,0.000000,2,0.4,0,2.03960781,0.4,0.000000,,1,0,1");
+  const std::string md = experiments::comparison_table_md(c, experiments::comparison_summary(c));
+  EXPECT_NE(md.find("| enrichment | 0.2887 | 7.2 % | 0.2121 | 5.3 % | unknown | 0.4000 | 4.0 |"), std::string::npos)
+      << md;
+}
+
+TEST(CompareCommand, HelpAndBadInput) {
+  for (const char* sub : {"compare", "sweep", "rsr"}) {
+    const RunResult r = run(std::string(sub) + " --help");
+    EXPECT_EQ(r.exit_code, 0) << sub << r.output;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
+  }
+  const fs::path dir = temp_dir("bad");
+  std::ifstream in(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
+  json c = json::parse(in);
+  c["material"]["K1"] = -1;
+  std::ofstream(dir / "bad.json") << c.dump(2);
+  const RunResult r = run("compare " + (dir / "bad.json").string() + " --out " + (dir / "out" / "x").string());
+  EXPECT_EQ(r.exit_code, 2) << r.output;
+  EXPECT_NE(r.output.find("bad.json: /material/K1: expected a number > 0"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "out")) << "a failed compare must leave nothing behind";
+  fs::remove_all(dir);
+}
+
+TEST(RadarScript, DrawsAPngFromSamplesCsv) {
+  const fs::path dir = temp_dir("radar");
+  const experiments::Comparison c = synthetic_comparison(false);
+  std::ofstream(dir / "samples.csv") << experiments::comparison_samples_csv(c);
+  const auto p = experiments::run_process({experiments::plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_radar.py",
+                                           (dir / "samples.csv").string(), (dir / "radar.png").string(), "--title", "t"},
+                                          (dir / "log").string());
+  std::ifstream log(dir / "log");
+  const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+  if (!p.ok() && text.find("No module named 'matplotlib'") != std::string::npos)
+    GTEST_SKIP() << "python3-matplotlib is not installed (scripts/install_dependencies.sh installs it)";
+  ASSERT_TRUE(p.ok()) << p.error << "\n" << text;
+  std::ifstream png(dir / "radar.png", std::ios::binary);
+  std::array<char, 8> magic{};
+  png.read(magic.data(), magic.size());
+  EXPECT_EQ(std::string(magic.data() + 1, 3), "PNG");
+  fs::remove_all(dir);
+}
+
+}  // namespace

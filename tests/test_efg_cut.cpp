@@ -1,0 +1,362 @@
+// The cut in the meshless model (paper §4; meshless/cut_weights.hpp, meshless/cut_quadrature.hpp): MLS consistency
+// on each side of the cut, exact zeros across it behind the front, continuity at the front (with its rate), the
+// patch test of a cut body, the lips in the divergence identity, and the local update against a full set-up.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fmt/format.h>
+
+#include <iostream>
+#include <map>
+#include <memory>
+#include <random>
+#include <set>
+
+#include "meshless/box_mesh.hpp"
+#include "meshless/cut_quadrature.hpp"
+#include "meshless/cut_weights.hpp"
+#include "meshless/efg_model.hpp"
+#include "meshless/mls_shape_functions.hpp"
+#include "meshless/node_search.hpp"
+#include "meshless/support_radii.hpp"
+#include "meshless/verification_problems.hpp"
+
+namespace meshless {
+namespace {
+
+constexpr double kEdge = 0.1;     // [m] the box
+constexpr double kSpacing = 0.01;  // [m] node spacing
+constexpr double kTransition = 0.01;  // [m] the front transition l
+
+// A kinked incision from the top face z = 0.1 down 30 mm, three panels (turns of about 35 and 50 degrees).
+core::RuledSurface kinked_cut() {
+  return core::RuledSurface({Eigen::Vector3d(0.02, 0.05, 0.1), Eigen::Vector3d(0.045, 0.035, 0.1),
+                             Eigen::Vector3d(0.07, 0.045, 0.1), Eigen::Vector3d(0.085, 0.07, 0.1)},
+                            -Eigen::Vector3d::UnitZ(), 0.03);
+}
+
+/// MLS over a jittered 11^3 box cloud with the cut's weights installed.
+struct CutCloud {
+  core::TetMesh mesh;
+  std::unique_ptr<NodeSearch> search;
+  std::unique_ptr<SupportRadii> radii;
+  std::unique_ptr<MlsShapeFunctions> mls;
+  std::unique_ptr<CutWeights> weights;
+
+  CutCloud(CutTreatment treatment, double transition) {
+    mesh = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(kEdge), 10, 10, 10, {}, 0.2, 17);
+    search = std::make_unique<NodeSearch>(mesh.vertices);
+    SupportRadiiParams p;
+    p.d_max = 2.0;
+    p.k = 6;
+    radii = std::make_unique<SupportRadii>(mesh.vertices, *search, p);
+    mls = std::make_unique<MlsShapeFunctions>(mesh.vertices, *radii, *search);
+    weights = std::make_unique<CutWeights>(kinked_cut(), mesh.vertices, radii->radii(), treatment, transition);
+    const CutWeights* w = weights.get();
+    mls->set_weight_modifier([w](int i, const Eigen::Vector3d& x, int side, Eigen::Vector3d* g) { return (*w)(i, x, side, g); });
+  }
+  Eigen::Vector3d node(int i) const { return mesh.vertices.row(i).transpose(); }
+};
+
+struct Consistency {
+  double partition = 0, reproduction = 0, gradient_sum = 0, gradient_reproduction = 0;
+  void add(const CutCloud& c, const Eigen::Vector3d& x, const MlsEvaluation& e) {
+    double sum = 0.0;
+    Eigen::Vector3d rep = -x, gsum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d grep = -Eigen::Matrix3d::Identity();
+    for (int k = 0; k < e.size(); ++k) {
+      sum += e.phi[k];
+      rep += e.phi[k] * c.node(e.nodes[k]);
+      gsum += e.dphi.col(k);
+      grep += c.node(e.nodes[k]) * e.dphi.col(k).transpose();
+    }
+    partition = std::max(partition, std::abs(sum - 1.0));
+    reproduction = std::max(reproduction, rep.norm() / kSpacing);
+    gradient_sum = std::max(gradient_sum, gsum.norm() * kSpacing);
+    gradient_reproduction = std::max(gradient_reproduction, grep.norm());
+  }
+  void expect(const std::string& what) const {
+    std::cout << what << ": |sum phi - 1| " << partition << ", |sum phi x - x|/h " << reproduction
+              << ", |sum grad phi| h " << gradient_sum << ", |sum x grad phi - I| " << gradient_reproduction << "\n";
+    EXPECT_LT(partition, 1e-12) << what;
+    EXPECT_LT(reproduction, 1e-12) << what;
+    EXPECT_LT(gradient_sum, 1e-12) << what;
+    EXPECT_LT(gradient_reproduction, 1e-12) << what;
+  }
+};
+
+/// Points `offset` [m] off the cut's panels along their normals (0: on the cut), between 2 and 28 mm deep.
+std::vector<Eigen::Vector3d> points_along_cut(const core::RuledSurface& cut, double offset, int count, unsigned seed) {
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(0.05, 0.95), depth(0.002, 0.028);
+  std::vector<Eigen::Vector3d> out;
+  for (int k = 0; k < count; ++k) {
+    const core::CutPanel p = cut.panel(k % cut.num_panels());
+    const double a = u(gen) * p.length;
+    const double top = p.bottom_start - cut.depth() + (p.bottom_end - p.bottom_start) * a / p.length;  // x . direction
+    out.push_back(p.origin + a * p.tangent + (top + depth(gen)) * cut.direction() + offset * p.normal);
+  }
+  return out;
+}
+
+TEST(EfgCut, ShapeFunctionsStayConsistentOnEachSideOfTheCut) {
+  for (CutTreatment treatment : {CutTreatment::enrichment, CutTreatment::visibility}) {
+    const CutCloud c(treatment, kTransition);
+    const std::string name = to_string(treatment);
+    // Everywhere in the box (the cut modifies the weights of the nodes around it).
+    Consistency everywhere;
+    std::mt19937 gen(3);
+    std::uniform_real_distribution<double> u(0.0, kEdge);
+    for (int k = 0; k < 3000; ++k) {
+      const Eigen::Vector3d x(u(gen), u(gen), u(gen));
+      everywhere.add(c, x, c.mls->evaluate(x, true));
+    }
+    everywhere.expect(name + ", random points in the cut box");
+    // Next to the cut, on each side separately, and on the lips themselves (side hints).
+    for (int side : {1, -1}) {
+      Consistency near;
+      for (const Eigen::Vector3d& x : points_along_cut(c.weights->cut(), side * 1e-3, 600, 5 + side))
+        near.add(c, x, c.mls->evaluate(x, true));
+      near.expect(fmt::format("{}, 1 mm from the cut on side {:+d}", name, side));
+      Consistency lip;
+      for (const Eigen::Vector3d& x : points_along_cut(c.weights->cut(), 0.0, 600, 9 + side))
+        lip.add(c, x, c.mls->evaluate(x, true, side));
+      lip.expect(fmt::format("{}, on lip {:+d}", name, side));
+    }
+  }
+}
+
+TEST(EfgCut, NodesAcrossTheCutContributeExactlyZeroBehindTheFront) {
+  // Enrichment: a node whose support meets the cut contributes nothing to points on the other side behind the front
+  // (farther than l from it). Visibility: nothing to points it cannot see.
+  for (CutTreatment treatment : {CutTreatment::enrichment, CutTreatment::visibility}) {
+    const CutCloud c(treatment, kTransition);
+    const core::RuledSurface& cut = c.weights->cut();
+    int shadowed = 0, checked = 0;
+    for (int side : {1, -1})
+      for (const Eigen::Vector3d& x : points_along_cut(cut, side * 1.5e-3, 800, 21 + side)) {
+        if (cut.front_distance(x) < kTransition) continue;  // "behind the front": beyond the transition
+        ++checked;
+        const MlsEvaluation e = c.mls->evaluate(x, false);
+        std::vector<NodeHit> hits;
+        c.search->covering(x, c.radii->radii(), c.radii->max_radius(), &hits);
+        for (const NodeHit& hit : hits) {
+          const bool hidden = treatment == CutTreatment::enrichment
+                                  ? c.weights->modifies(hit.node) && c.weights->node_side(hit.node) != side
+                                  : cut.segment_crosses(c.node(hit.node), x);
+          if (!hidden) continue;
+          ++shadowed;
+          for (int k = 0; k < e.size(); ++k)
+            if (e.nodes[k] == hit.node) EXPECT_EQ(e.phi[k], 0.0) << "node " << hit.node << " seen across the cut";
+        }
+      }
+    std::cout << to_string(treatment) << ": " << checked << " points behind the front, " << shadowed
+              << " covering nodes on the other side, all with phi = 0\n";
+    EXPECT_GT(checked, 500);
+    EXPECT_GT(shadowed, 5000);
+  }
+}
+
+/// Largest oscillation max - min of any phi_i over a circle of radius r around the middle of panel 1's bottom edge,
+/// in the plane normal to the front (64 points, plus the two lips behind the front).
+double oscillation_around_front(const CutCloud& c, double r) {
+  const core::RuledSurface& cut = c.weights->cut();
+  const Eigen::Vector3d front = 0.5 * (cut.top()[1] + cut.top()[2]) + cut.depth() * cut.direction();
+  const Eigen::Vector3d ahead = cut.direction(), n = cut.panel_normal(1);
+  std::map<int, std::pair<double, double>> range;  // node -> (min, max) of phi_i
+  std::vector<std::pair<Eigen::Vector3d, int>> points;
+  const int m = 64;
+  for (int k = 0; k < m; ++k) {
+    const double theta = -M_PI + (k + 0.5) * 2.0 * M_PI / m;
+    points.push_back({front + r * (std::cos(theta) * ahead + std::sin(theta) * n), 0});
+  }
+  points.push_back({front - r * ahead, 1});   // the s > 0 lip, r behind the front
+  points.push_back({front - r * ahead, -1});  // the s < 0 lip
+  std::set<int> all;
+  std::vector<MlsEvaluation> evals;
+  for (const auto& [x, side] : points) {
+    evals.push_back(c.mls->evaluate(x, false, side));
+    for (int node : evals.back().nodes) all.insert(node);
+  }
+  double worst = 0.0;
+  for (int node : all) {
+    double lo = 1e300, hi = -1e300;
+    for (const MlsEvaluation& e : evals) {
+      double phi = 0.0;
+      for (int k = 0; k < e.size(); ++k)
+        if (e.nodes[k] == node) phi = e.phi[k];
+      lo = std::min(lo, phi);
+      hi = std::max(hi, phi);
+    }
+    worst = std::max(worst, hi - lo);
+  }
+  return worst;
+}
+
+TEST(EfgCut, ShapeFunctionsAreContinuousAtTheFrontWithRateOne) {
+  const CutCloud c(CutTreatment::enrichment, kTransition);
+  std::vector<double> radii, jumps;
+  for (double r : {kTransition / 4, kTransition / 8, kTransition / 16, kTransition / 32, kTransition / 64}) {
+    radii.push_back(r);
+    jumps.push_back(oscillation_around_front(c, r));
+    std::cout << "r = " << r * 1e3 << " mm: largest jump of phi_i around the front " << jumps.back() << "\n";
+  }
+  const double rate = convergence_rate(radii, jumps);
+  std::cout << "rate " << rate << "\n";
+  EXPECT_NEAR(rate, 1.0, 0.1);
+  EXPECT_LT(jumps.back(), 0.01);
+  // Without the transition (l = 0, the paper's phi as it stands) the shape functions keep a jump at the front.
+  const CutCloud paper(CutTreatment::enrichment, 0.0);
+  const double coarse = oscillation_around_front(paper, kTransition / 4), fine = oscillation_around_front(paper, kTransition / 64);
+  std::cout << "l = 0: jump " << coarse << " at r = l/4 and " << fine << " at r = l/64\n";
+  EXPECT_GT(fine, 0.5 * coarse);
+  EXPECT_GT(fine, 0.05);
+}
+
+/// The EFG problem of the cut box: cloud, quadrature order 2, lung-like material (k = 0), one elastic step.
+EfgProblem cut_box_problem(CutTreatment treatment, const core::RuledSurface& cut) {
+  EfgProblem p;
+  p.name = "cut box";
+  p.mesh = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(kEdge), 10, 10, 10, {}, 0.2, 17);
+  p.material = {6000.0, 12000.0, 18000.0, 0.3, 0.0};
+  p.support.d_max = 2.0;
+  p.support.k = 6;
+  p.quadrature_order = 2;
+  p.node_spacing = kSpacing;
+  p.step_times = {0.0};
+  p.cut = cut;
+  p.cut_treatment = treatment;
+  p.front_transition = kTransition;
+  return p;
+}
+
+TEST(EfgCut, PatchTestOfACutBodyIsPassedToRoundOff) {
+  // u = a + G X is an exact solution of the cut body when the lips carry their traction sigma n too: imposed by
+  // penalty and traction on every outer face and by traction on both lips, it must come out to round-off.
+  const Eigen::Vector3d a0(1e-4, -2e-4, 3e-4);
+  Eigen::Matrix3d g;
+  g << 1e-3, 2e-4, -3e-4, -1e-4, -2e-3, 5e-4, 4e-4, 1e-4, 1.5e-3;
+  for (CutTreatment treatment : {CutTreatment::enrichment, CutTreatment::visibility}) {
+    EfgProblem p = cut_box_problem(treatment, kinked_cut());
+    const core::KelvinLaw law(p.material);
+    const core::Vector6 eps(g(0, 0), g(1, 1), g(2, 2), g(0, 1) + g(1, 0), g(1, 2) + g(2, 1), g(2, 0) + g(0, 2));
+    const Eigen::Matrix3d sigma = core::voigt_to_stress(law.elastic_matrix(p.material.K1) * eps);
+    const int nf = static_cast<int>(p.mesh.boundary_faces.rows());
+    p.penalised_faces.assign(nf, 1);
+    p.loaded_faces.assign(nf, 1);
+    p.prescribed_displacement = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d { return a0 + g * x; };
+    p.traction = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+      Eigen::Vector3d n = Eigen::Vector3d::Zero();
+      double best = 1e30;
+      for (int d = 0; d < 3; ++d) {
+        if (std::abs(x[d]) < best) { best = std::abs(x[d]); n = -Eigen::Vector3d::Unit(d); }
+        if (std::abs(x[d] - kEdge) < best) { best = std::abs(x[d] - kEdge); n = Eigen::Vector3d::Unit(d); }
+      }
+      return sigma * n;
+    };
+    p.lip_traction = [&](const Eigen::Vector3d&, const Eigen::Vector3d& n) -> Eigen::Vector3d { return sigma * n; };
+    EfgModel model(std::move(p));
+    model.run();
+    std::mt19937 gen(5);
+    std::uniform_real_distribution<double> u(0.05 * kEdge, 0.95 * kEdge);
+    double err = 0.0, umax = 0.0;
+    for (int k = 0; k < 400; ++k) {
+      const Eigen::Vector3d x(u(gen), u(gen), u(gen));
+      const Eigen::Vector3d exact = a0 + g * x;
+      err = std::max(err, (model.displacement_at(x) - exact).norm());
+      umax = std::max(umax, exact.norm());
+    }
+    std::cout << to_string(treatment) << ": cut patch test max relative error " << err / umax << " ("
+              << model.statistics().num_lip_points << " lip points, " << model.statistics().num_cut_modified_nodes
+              << " modified nodes)\n";
+    EXPECT_LT(err / umax, 1e-9);
+  }
+}
+
+TEST(EfgCut, LipsCloseTheDivergenceIdentity) {
+  // The discrete divergence identity int grad phi_i = oint phi_i n (before VCI) holds to quadrature error for the cut
+  // body once both lips are part of the boundary (measured: 3.8x the whole box's, the steep weights of the front
+  // transition cost some accuracy); without them it would miss oint_lips phi_i n, 49x larger (measured).
+  EfgProblem whole = cut_box_problem(CutTreatment::enrichment, kinked_cut());
+  whole.cut.reset();
+  EfgModel uncut(std::move(whole));
+  uncut.setup_system();
+  EfgModel cut(cut_box_problem(CutTreatment::enrichment, kinked_cut()));
+  cut.setup_system();
+  const ShapeTable& lips = cut.boundary_points();
+  Eigen::Matrix3Xd lip_term = Eigen::Matrix3Xd::Zero(3, cut.statistics().num_nodes);
+  for (int q = 0; q < lips.size(); ++q)
+    if (lips.on_lip(q))
+      for (int s = lips.begin(q); s < lips.end(q); ++s)
+        lip_term.col(lips.nodes[s]) += lips.weights[q] * lips.phi[s] * lips.normals.col(q);
+  const double lip_max = lip_term.colwise().norm().maxCoeff();
+  std::cout << "divergence defect: whole box " << uncut.divergence_defect() << " m^2, cut box "
+            << cut.divergence_defect() << " m^2; the lips' own term reaches " << lip_max << " m^2\n";
+  EXPECT_LT(cut.divergence_defect(), 4.5 * uncut.divergence_defect());
+  EXPECT_GT(lip_max, 40.0 * cut.divergence_defect());
+}
+
+TEST(EfgCut, LocalUpdateGivesTheStiffnessOfAFullSetUp) {
+  for (CutTreatment treatment : {CutTreatment::enrichment, CutTreatment::visibility}) {
+    const core::RuledSurface full_cut = kinked_cut();
+    EfgModel full(cut_box_problem(treatment, full_cut));
+    full.setup_system();
+    full.assemble_system(true);
+    EfgModel local(cut_box_problem(treatment, full_cut.truncated(0.55 * full_cut.trace_length())));
+    local.setup_system();
+    const CutUpdate update = local.advance_cut(full_cut);
+    local.assemble_system(true);
+    const SparseMatrix& a = full.system_matrix();
+    const SparseMatrix& b = local.system_matrix();
+    ASSERT_EQ(a.rows(), b.rows());
+    ASSERT_EQ(a.nonZeros(), b.nonZeros()) << "the same node pairs couple";
+    const SparseMatrix difference = a - b;
+    const double diff = difference.coeffs().cwiseAbs().maxCoeff();
+    const double scale = a.coeffs().cwiseAbs().maxCoeff();
+    std::cout << to_string(treatment) << ": local update recomputed " << update.volume_points_recomputed << " of "
+              << update.volume_points << " volume points and " << update.boundary_points_recomputed << " of "
+              << update.boundary_points << " boundary points; max |K_local - K_full| / max |K| = " << diff / scale
+              << "\n";
+    EXPECT_LT(diff / scale, 1e-12);
+    EXPECT_GT(update.volume_points_recomputed, 0);
+    EXPECT_LT(update.volume_points_recomputed, update.volume_points / 2);
+    EXPECT_EQ(local.statistics().num_volume_points, full.statistics().num_volume_points);
+    EXPECT_LT((local.divergence_defect() - full.divergence_defect()), 1e-15);
+  }
+}
+
+TEST(EfgCut, CutCellsAreSplitAndFilledExactly) {
+  const core::RuledSurface cut = kinked_cut();
+  const core::TetMesh mesh =
+      make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(kEdge), 10, 10, 10, {}, 0.2, 17);
+  int crossed = 0;
+  double lip_area = 0.0;
+  for (int t = 0; t < mesh.num_tets(); ++t) {
+    TetVertices tet;
+    for (int k = 0; k < 4; ++k) tet[k] = mesh.vertices.row(mesh.tets(t, k)).transpose();
+    std::vector<std::vector<Eigen::Vector3d>> lips;
+    const std::vector<int> panels = panels_crossing_tet(cut, tet, &lips);
+    if (panels.empty()) continue;
+    ++crossed;
+    double volume = 0.0;
+    for (const TetVertices& piece : split_tet(cut, panels, tet)) {
+      volume += tet_volume(piece);
+      // No piece straddles the cut: its centroid and vertices are on one side wherever the cut runs through it.
+      const Eigen::Vector3d centroid = 0.25 * (piece[0] + piece[1] + piece[2] + piece[3]);
+      for (const Eigen::Vector3d& v : piece)
+        EXPECT_FALSE(cut.segment_crosses(centroid, v + 1e-9 * (centroid - v))) << "a piece straddles the cut";
+    }
+    EXPECT_NEAR(volume, tet_volume(tet), 1e-12 * tet_volume(tet));
+    for (const auto& polygon : lips)
+      for (std::size_t v = 1; v + 1 < polygon.size(); ++v)
+        lip_area += triangle_area({polygon[0], polygon[v], polygon[v + 1]});
+  }
+  // The lips' area is the cut's area inside the box: all of it (the top line lies on the box's top face).
+  std::cout << crossed << " cut cells, lips " << lip_area * 1e6 << " mm^2 against the cut's " << cut.area() * 1e6
+            << " mm^2\n";
+  EXPECT_GT(crossed, 50);
+  EXPECT_NEAR(lip_area, cut.area(), 1e-10);
+}
+
+}  // namespace
+}  // namespace meshless
