@@ -107,7 +107,9 @@ void time_full_solve(benchmark::State& state, const meshless::EfgProblem& proble
   options.patch_radius = d.patch_radius;
   options.response_step = meshless::response_step(problem, d.response_time == "end");
   options.max_workers = 1;
-  const meshless::PatchLoad load{d.contacts[0].contact, {0.0, 0.0, -0.5 * d.max_force}};
+  // The contact by position: the cloud is rebuilt here, and its node numbering need not be the file's.
+  const int contact = surface.nearest(d.surface_position.row(d.contacts[0].contact).transpose());
+  const meshless::PatchLoad load{contact, {0.0, 0.0, -0.5 * d.max_force}};
   for (auto _ : state) {
     const std::vector<meshless::SolvedLoad> r =
         meshless::solve_patch_loads(problem, {}, surface, {load}, options);
