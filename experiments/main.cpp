@@ -8,6 +8,8 @@
 
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
+#include "experiments/fit_commands.hpp"
+#include "experiments/probe_commands.hpp"
 #include "experiments/compare_command.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/reproduce_command.hpp"
@@ -33,6 +35,8 @@ int main(int argc, char** argv) {
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_fit_commands(app);
+  experiments::add_probe_commands(app);
   experiments::add_compare_command(app);
   experiments::add_sweep_command(app);
   experiments::add_rsr_command(app);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Run the Google Benchmark programs and keep their JSON reports in results/bench/ (docs/PERFORMANCE.md).
-#   scripts/run_benchmarks.sh            all: bench_mls, bench_efg, bench_fem, bench_cut, bench_fem_preconditioners
+#   scripts/run_benchmarks.sh            all: bench_mls, bench_efg, bench_fem, bench_cut, bench_surrogate, bench_fem_preconditioners
 #                                        (hours: bench_fem alone takes over an hour on 2 cores)
 #   scripts/run_benchmarks.sh bench_fem  only the named ones
 #   BENCH_FILTER='/32/' BENCH_SUFFIX=_32k scripts/run_benchmarks.sh bench_efg
@@ -16,7 +16,7 @@ if [[ "${1:-}" == "-h" || "${1:-}" == "--help" ]]; then
   exit 0
 fi
 benches=("$@")
-[[ ${#benches[@]} -eq 0 ]] && benches=(bench_mls bench_efg bench_fem bench_cut bench_fem_preconditioners)
+[[ ${#benches[@]} -eq 0 ]] && benches=(bench_mls bench_efg bench_fem bench_cut bench_surrogate bench_fem_preconditioners)
 # OpenMPI: allow root (containers, CI) and more processes than cores.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release -DTISSUE_BUILD_BENCHMARKS=ON >/dev/null
