@@ -278,7 +278,7 @@ int run_verify_meshless(const std::string& out_dir, bool quick) {
                           {"fem_dofs", dofs},
                           {"fem_change_2_to_1.5_mm_of_peak", fem_change},
                           {"runs", runs}};
-    md += "\nThe default front transition is node spacing / 50 (`/meshless/front_transition`).\n\n";
+    md += "\nThe default front transition is 0, the paper's function (`/meshless/front_transition`).\n\n";
   }
 
   progress.step("writing meshless.json and meshless.md");

@@ -131,7 +131,7 @@ json time_one_force(const core::Case& c, const core::Geometry& g, double force, 
   try {
     progress->step(fmt::format("{:.2f} N: FEM reference", force));
     reference_fem::FemRunOptions options;
-    const ModelResult fem = fem_model_result(g, reference_fem::run_case(c, g, options), 0.0);
+    const ModelResult fem = fem_model_result(c, g, reference_fem::run_case(c, g, options), 0.0);
     row["fem"] = {{"seconds", fem.total_seconds},
                   {"setup_seconds", fem.setup_seconds},
                   {"newton_iterations", newton_iterations(fem)},
