@@ -5,10 +5,9 @@
 // Ratios within one run: full set-up / local update; how each grows with the node count.
 #include <benchmark/benchmark.h>
 
-#include <deal.II/base/mpi.h>
-
 #include <memory>
 
+#include "benchmarks/mpi_benchmark_main.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
@@ -65,14 +64,8 @@ void BM_CutLocalUpdate(benchmark::State& state) {
 
 BENCHMARK(BM_CutFullSetUp)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_CutLocalUpdate)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
+
 int main(int argc, char** argv) {
-  // A cloud too large to factorise gets the AMG-Krylov solver at set-up, which needs MPI and PETSc initialised;
-  // only the program name is passed on, so that PETSc does not read Google Benchmark's flags.
-  int petsc_argc = 1;
-  dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  return 0;
+  // A cloud too large to factorise gets the AMG-Krylov solver at set-up.
+  return benchmarks::run_with_mpi(argc, argv);
 }
