@@ -67,5 +67,5 @@ BENCHMARK(BM_CutLocalUpdate)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillis
 
 int main(int argc, char** argv) {
   // A cloud too large to factorise gets the AMG-Krylov solver at set-up.
-  return benchmarks::run_with_mpi(argc, argv);
+  return bench::run_benchmarks_with_petsc(argc, argv);
 }

@@ -161,5 +161,5 @@ BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", tru
     ->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 int main(int argc, char** argv) {
-  return benchmarks::run_with_mpi(argc, argv, [] { cached_model().reset(); });
+  return bench::run_benchmarks_with_petsc(argc, argv, [] { cached_model().reset(); });
 }
