@@ -10,13 +10,13 @@
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
-#include <deal.II/base/mpi.h>
 #include <sys/resource.h>
 
 #include <memory>
 #include <string>
 #include <tuple>
 
+#include "benchmarks/mpi_benchmark_main.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
@@ -161,14 +161,5 @@ BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", tru
     ->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 int main(int argc, char** argv) {
-  // PETSc (the AMG-Krylov solver) needs MPI and PETSc initialised; only the program name is passed on, so
-  // that PETSc does not read Google Benchmark's flags.
-  int petsc_argc = 1;
-  dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
-  cached_model().reset();
-  return 0;
+  return bench::run_benchmarks_with_petsc(argc, argv, [] { cached_model().reset(); });
 }

@@ -139,6 +139,7 @@ FemSpec read_fem(const std::optional<JsonReader>& r) {
   f.degree = r->integer("degree", 1, 2, 2);
   f.newton_tolerance = r->in_range("newton_tolerance", 0.0, 1e-2, false, true, 1e-8);
   f.max_newton_iterations = r->integer("max_newton_iterations", 1, 200, 25);
+  f.linear_solver = r->choice("linear_solver", {"amg", "direct"}, f.linear_solver);
   r->finish();
   return f;
 }
@@ -150,6 +151,37 @@ OutputSpec read_output(const std::optional<JsonReader>& r) {
   o.every = r->integer("every", 1, 1000000, 1);
   r->finish();
   return o;
+}
+
+SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec& load) {
+  SurrogateSpec s;
+  s.contact_points = {load.point};
+  s.patch_radius = load.radius;
+  s.contact_length = 2.0 * s.patch_radius;
+  if (!r) return s;
+  if (r->has("contact_points")) {
+    s.contact_points = r->vector3_list("contact_points", 1);
+    for (auto& p : s.contact_points) p *= kMm;
+  }
+  s.patch_radius = r->positive("patch_radius", load.radius / kMm) * kMm;
+  s.max_force = r->in_range("max_force", 0.0, 1e4, false, true, s.max_force);
+  s.force_levels = r->integer("force_levels", 2, 50, s.force_levels);
+  s.response_time = r->choice("response_time", {"end_of_ramp", "end"}, std::string("end_of_ramp")) == "end"
+                        ? SurrogateSpec::ResponseTime::end
+                        : SurrogateSpec::ResponseTime::end_of_ramp;
+  s.max_force_order = r->integer("max_force_order", 1, 8, s.max_force_order);
+  if (s.max_force_order > 2 * s.force_levels - 1)
+    r->fail("max_force_order", fmt::format("expected at most 2 * force_levels - 1 = {} (fewer coefficients than "
+                                           "trained levels), got {}",
+                                           2 * s.force_levels - 1, s.max_force_order));
+  s.max_tangential_order = r->integer("max_tangential_order", 0, 12, s.max_tangential_order);
+  s.max_normal_order = r->integer("max_normal_order", 0, 8, s.max_normal_order);
+  s.max_contact_order = r->integer("max_contact_order", 0, 6, s.max_contact_order);
+  s.contact_length = r->positive("contact_length", 2.0 * s.patch_radius / kMm) * kMm;
+  s.cv_folds = r->integer("cv_folds", 2, 20, s.cv_folds);
+  s.holdout_forces = r->integer("holdout_forces", 0, 100, s.holdout_forces);
+  r->finish();
+  return s;
 }
 
 }  // namespace
@@ -172,6 +204,7 @@ Case parse_case(const nlohmann::json& document, const std::string& file) {
   c.meshless = read_meshless(root.optional_object("meshless"), c.geometry.mesh_size);
   c.fem = read_fem(root.optional_object("fem"));
   c.output = read_output(root.optional_object("output"));
+  c.surrogate = read_surrogate(root.optional_object("surrogate"), c.load);
   root.finish();
   return c;
 }

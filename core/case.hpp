@@ -80,22 +80,51 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
-  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default,
-  /// node_spacing / 50, keeps the shape functions continuous at the front and costs no accuracy against the FEM crack
-  /// (docs/MESHLESS.md §5: at l comparable to the Gauss-point spacing it stiffens the crack).
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default, 0, is the
+  /// paper's function as it stands: the shape functions jump across the front line itself (a set no Gauss point
+  /// meets). l > 0 makes them continuous there, at a cost (docs/MESHLESS.md §5.2): l comparable to the Gauss-point
+  /// spacing stiffens the crack, and l far below it puts gradients of 1/l at the few points inside the transition,
+  /// which took the nonlinear law out of its admissible range on the cracked lung (configs/ci/lung_large_ci.json,
+  /// l = spacing / 50: Newton diverged in step 3; l = 0 converged).
   double front_transition = 0.012 * kFrontTransitionPerSpacing;
-  static constexpr double kFrontTransitionPerSpacing = 0.02;
+  static constexpr double kFrontTransitionPerSpacing = 0.0;
 };
 
 struct FemSpec {
   int degree = 2;                   ///< FE_SimplexP degree
   double newton_tolerance = 1e-8;   ///< relative residual
   int max_newton_iterations = 25;
+  /// The Newton systems' preconditioner: "amg" (algebraic multigrid, any size and MPI process count) or
+  /// "direct" (LU factors, small meshes on one process); docs/FEM_REFERENCE.md.
+  std::string linear_solver = "amg";
 };
 
 struct OutputSpec {
   bool vtu = true;
   int every = 1;  ///< write VTU every n-th step (the last step is always written)
+};
+
+/// The force -> displacement surrogate of paper §3 (eqs. 25-28) that `tissue fit` trains on the meshless node
+/// cloud (docs/SURROGATE.md). Every default lives here; read_surrogate() fills the ones that depend on the case.
+struct SurrogateSpec {
+  enum class ResponseTime {
+    end_of_ramp,  ///< the first step at which the ramped force is complete (t >= load.ramp_time)
+    end,          ///< the last step (time.total): the crept response under the held force
+  };
+  /// Contact points [m], each snapped to the nearest surface node of the node cloud; absent -> the load point.
+  std::vector<Eigen::Vector3d> contact_points;
+  double patch_radius = 0.0;  ///< [m] traction patch around a contact node; absent -> load.radius
+  /// [N] every force component is trained over [-max_force, max_force]: forces up to the paper's 4 N in magnitude.
+  double max_force = 4.0;
+  int force_levels = 4;       ///< trained levels per sign and axis, evenly spaced up to max_force (0 excluded)
+  ResponseTime response_time = ResponseTime::end_of_ramp;
+  int max_force_order = 4;       ///< largest lambda tried (eqs. 25-27)
+  int max_tangential_order = 6;  ///< largest a tried (eq. 28, surface-local tangential coordinates)
+  int max_normal_order = 2;      ///< largest b tried (eq. 28, the normal coordinate)
+  int max_contact_order = 2;     ///< largest c tried (eq. 28, the contact terms)
+  double contact_length = 0.0;   ///< [m] l of the contact terms; absent -> 2 * patch_radius
+  int cv_folds = 5;              ///< k of the k-fold cross-validation that picks lambda, a and b
+  int holdout_forces = 2;        ///< full solves at untrained forces, to report the surrogate's error
 };
 
 struct Case {
@@ -113,6 +142,7 @@ struct Case {
   MeshlessSpec meshless;
   FemSpec fem;
   OutputSpec output;
+  SurrogateSpec surrogate;  ///< defaults when the case has no /surrogate
 };
 
 /// Read and validate a case file. Throws CaseError (file, JSON path, what was expected).

@@ -340,7 +340,7 @@ int run_compare(const std::string& config, const CompareOptions& options) {
     progress.step(fmt::format("FEM step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}", s.step, steps,
                               s.time, s.newton_iterations, s.residuals.back()));
   };
-  cmp.reference = fem_model_result(g, reference_fem::run_case(c, g, fem_options), 0.0);
+  cmp.reference = fem_model_result(c, g, reference_fem::run_case(c, g, fem_options), 0.0);
   cmp.reference.details["geometry_seconds"] = nullptr;  // shared by the three models: summary.json/geometry_seconds
 
   for (const auto& variant : meshless_variants()) {

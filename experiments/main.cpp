@@ -3,10 +3,13 @@
 #include <deal.II/base/mpi.h>
 #include <fmt/format.h>
 
+#include <cstring>
 #include <iostream>
 
 #include "core/case_error.hpp"
 #include "experiments/case_commands.hpp"
+#include "experiments/fit_commands.hpp"
+#include "experiments/probe_commands.hpp"
 #include "experiments/compare_command.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/reproduce_command.hpp"
@@ -16,14 +19,24 @@
 #include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
-  // MPI and PETSc (the EFG model's AMG-Krylov solve, docs/MESHLESS.md §2), finalised when main returns.
-  dealii::Utilities::MPI::MPI_InitFinalize mpi_initialization(argc, argv);
+  // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's AMG-Krylov
+  // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
+  // `solve fem` is distributed: other commands would run N copies side by side.
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
+  const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
+  if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1 &&
+      !(argc > 2 && std::strcmp(argv[1], "solve") == 0 && std::strcmp(argv[2], "fem") == 0)) {
+    if (root) std::cerr << "error: only `tissue solve fem` runs under mpirun with more than one process\n";
+    return 2;
+  }
   CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "tissue 0.1.0");
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);
+  experiments::add_fit_commands(app);
+  experiments::add_probe_commands(app);
   experiments::add_compare_command(app);
   experiments::add_sweep_command(app);
   experiments::add_rsr_command(app);
@@ -32,13 +45,15 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {
     return r.exit_code;
-  } catch (const CLI::ParseError& e) {
-    return app.exit(e);
-  } catch (const core::CaseError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+  } catch (const CLI::ParseError& e) {  // --help and usage errors: print once
+    return root ? app.exit(e) : e.get_exit_code();
+  } catch (const core::CaseError& e) {  // found alike by every MPI process: rank 0 reports it
+    if (root) std::cerr << "error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << (root ? std::string() : fmt::format("[rank {}] ", dealii::Utilities::MPI::this_mpi_process(
+                                                                       MPI_COMM_WORLD)))
+              << "error: " << e.what() << "\n";
     return 1;
   } catch (const std::string& e) {  // the Gmsh SDK throws its last error as a string
     std::cerr << "error: " << e << "\n";

@@ -19,7 +19,8 @@ void describe_samples_near_cut(const core::Geometry& g, ModelResult* r) {
   }
 }
 
-ModelResult fem_model_result(const core::Geometry& g, const reference_fem::FemRunResult& f, double setup) {
+ModelResult fem_model_result(const core::Case& c, const core::Geometry& g, const reference_fem::FemRunResult& f,
+                             double setup) {
   ModelResult r;
   r.model = "fem";
   r.sample_points = g.sample_points;
@@ -27,14 +28,21 @@ ModelResult fem_model_result(const core::Geometry& g, const reference_fem::FemRu
   r.sample_displacements = f.sample_displacements;
   r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
   r.total_seconds = setup + f.total_seconds;
-  int factorizations = 0;
+  int builds = 0;
   for (const auto& s : f.steps) {
     r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
                        s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin});
-    factorizations += s.factorizations;
+    builds += s.preconditioner_builds;
   }
-  r.details["lu_factorizations"] = factorizations;
-  r.details["linear_solver"] = "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)";
+  r.details["preconditioner_builds"] = builds;
+  r.details["linear_solver"] =
+      c.fem.linear_solver == "direct"
+          ? "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)"
+          : "GMRES (right-preconditioned by Trilinos ML smoothed-aggregation AMG of an earlier consistent tangent, "
+            "rigid-body near null space)";
+  r.details["mpi_processes"] = f.mpi_processes;
+  r.details["cells_per_process"] = f.cells_per_process;
+  r.details["peak_memory_mb"] = f.peak_memory_mb;
   r.details["n_dofs"] = f.n_dofs;
   r.details["n_cells"] = f.n_cells;
   r.details["load_area_mm2"] = f.load_area * 1e6;

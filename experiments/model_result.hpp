@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "reference_fem/fem_model.hpp"
 #include "core/inadmissible_strain.hpp"
@@ -42,10 +43,10 @@ struct ModelResult {
   nlohmann::json details = nlohmann::json::object();  ///< model-specific figures (DOFs, sections, ...)
 };
 
-/// The FEM reference's run as a ModelResult; `geometry_seconds` (building the geometry and the FEM mesh) is
-/// added to the set-up and total times and recorded in the details.
-ModelResult fem_model_result(const core::Geometry& geometry, const reference_fem::FemRunResult& run,
-                             double geometry_seconds);
+/// The FEM reference's run of case `c` as a ModelResult; `geometry_seconds` (building the geometry and the FEM
+/// mesh) is added to the set-up and total times and recorded in the details.
+ModelResult fem_model_result(const core::Case& c, const core::Geometry& geometry,
+                             const reference_fem::FemRunResult& run, double geometry_seconds);
 
 /// Fill sample_cut_distance and sample_lip from the geometry's cut (nothing without one).
 void describe_samples_near_cut(const core::Geometry& geometry, ModelResult* result);

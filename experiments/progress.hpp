@@ -13,7 +13,8 @@ struct CommandResult {
 
 class Progress {
  public:
-  Progress(std::string task, int total_steps);
+  /// `quiet`: count and time the steps but print nothing (the MPI processes other than rank 0).
+  Progress(std::string task, int total_steps, bool quiet = false);
   void step(const std::string& what);  ///< announce the next step
   void done();                         ///< announce completion with the elapsed time
   double elapsed_seconds() const;
@@ -22,6 +23,7 @@ class Progress {
   std::string task_;
   int total_;
   int current_ = 0;
+  bool quiet_ = false;
   std::chrono::steady_clock::time_point start_;
 };
 

@@ -131,7 +131,7 @@ json time_one_force(const core::Case& c, const core::Geometry& g, double force, 
   try {
     progress->step(fmt::format("{:.2f} N: FEM reference", force));
     reference_fem::FemRunOptions options;
-    const ModelResult fem = fem_model_result(g, reference_fem::run_case(c, g, options), 0.0);
+    const ModelResult fem = fem_model_result(c, g, reference_fem::run_case(c, g, options), 0.0);
     row["fem"] = {{"seconds", fem.total_seconds},
                   {"setup_seconds", fem.setup_seconds},
                   {"newton_iterations", newton_iterations(fem)},
@@ -280,9 +280,12 @@ int run_reproduce(const ReproduceOptions& options) {
     for (double f : plan.timing.forces)
       timing["rows"].push_back(time_one_force(case_at_force(timing_case, f, plan.timing.steps), g, f, &progress));
     progress.step("timing: tables and timing.png (scripts/plot_timing.py)");
+    // The plot script reads timing.json; it is written again with the plot's outcome.
     write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
-    if (options.plot) plot_timing(out, &timing);
-    write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    if (options.plot) {
+      plot_timing(out, &timing);
+      write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    }
     const std::string md = timing_md(timing);
     write_text_file(out.file("timing.md").string(), md);
     std::cout << md << "\n";

@@ -1,11 +1,13 @@
 #include "experiments/solve_commands.hpp"
 
+#include <deal.II/base/mpi.h>
 #include <fmt/format.h>
 
 #include <stdexcept>
 
 #include <fstream>
 #include <iostream>
+#include <memory>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
@@ -14,6 +16,7 @@
 #include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
 #include "reference_fem/fem_model.hpp"
+#include "reference_fem/geometry_broadcast.hpp"
 
 namespace experiments {
 namespace {
@@ -49,33 +52,79 @@ core::Geometry build_timed_geometry(const core::Case& c, bool fem, Progress* pro
   return g;
 }
 
+/// Rank 0 stages the results folder (core::OutputDirectory); every process learns its path, since each writes
+/// its own VTU pieces there. A failure on rank 0 is thrown on every process. Collective.
+std::unique_ptr<core::OutputDirectory> stage_on_rank_zero(const std::string& out_dir, std::string* staging) {
+  std::unique_ptr<core::OutputDirectory> out;
+  std::string error;
+  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0) {
+    try {
+      out = std::make_unique<core::OutputDirectory>(out_dir);
+      *staging = out->staging().string();
+    } catch (const std::exception& e) {
+      error = fmt::format("cannot create the output folder {}: {}", out_dir, e.what());
+    }
+  }
+  const auto shared = dealii::Utilities::MPI::broadcast(MPI_COMM_WORLD, std::vector<std::string>{*staging, error}, 0);
+  if (!shared[1].empty()) throw std::runtime_error(shared[1]);
+  *staging = shared[0];
+  return out;
+}
+
 int run_solve_fem(const std::string& config, const std::string& out_dir) {
+  // Under mpirun every process runs this function: rank 0 meshes, prints and writes the results files, all
+  // of them solve together (reference_fem/fem_model.hpp).
+  const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
+  const unsigned int n_processes = dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD);
   const core::Case c = core::load_case(config);
-  Progress progress("solve fem", 2 + c.time.steps);
-  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
+  Progress progress("solve fem", 2 + c.time.steps, !root);
+  std::string staging;
+  // Staged: nothing is left behind if anything below fails.
+  const std::unique_ptr<core::OutputDirectory> out = stage_on_rank_zero(out_dir, &staging);
   double geometry_seconds = 0.0;
-  const core::Geometry g = build_timed_geometry(c, true, &progress, &geometry_seconds);
-  progress.step(fmt::format("deal.II setup and time stepping ({} tets, degree {})", g.fem_mesh.num_tets(),
-                            c.fem.degree));
+  const core::Geometry g = reference_fem::build_on_rank_zero(
+      [&] { return build_timed_geometry(c, true, &progress, &geometry_seconds); }, MPI_COMM_WORLD);
+  progress.step(fmt::format("deal.II setup and time stepping ({} tets, degree {}, {} linear solver, {} MPI process{})",
+                            g.fem_mesh.num_tets(), c.fem.degree, c.fem.linear_solver, n_processes,
+                            n_processes > 1 ? "es" : ""));
   reference_fem::FemRunOptions run;
-  if (c.output.vtu) run.vtu_prefix = out.file("displacement").string();
+  run.communicator = MPI_COMM_WORLD;
+  if (c.output.vtu) run.vtu_prefix = staging + "/displacement";
   run.on_step = [&](const reference_fem::StepReport& s) {
-    progress.step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} GMRES, {} LU), residual {:.2e}{}",
+    progress.step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} GMRES, {} preconditioner build{}), "
+                              "residual {:.2e}{}",
                               s.step, c.time.steps, s.time, s.newton_iterations, s.linear_iterations,
-                              s.factorizations, s.residuals.back(),
+                              s.preconditioner_builds, s.preconditioner_builds == 1 ? "" : "s", s.residuals.back(),
                               s.failed_attempts.empty() ? std::string()
                                                         : fmt::format(", {} cut-backs into {} sub-steps",
                                                                       s.failed_attempts.size(), s.substeps)));
   };
   const reference_fem::FemRunResult f = reference_fem::run_case(c, g, run);
-  const ModelResult r = fem_model_result(g, f, geometry_seconds);
-  write_model_files(out, c, r);
-  out.commit();
+  if (!root) return 0;  // rank 0 writes the results files
+  const ModelResult r = fem_model_result(c, g, f, geometry_seconds);
+  write_model_files(*out, c, r);
+  out->commit();
   progress.done();
   print_summary(r);
   std::cout << fmt::format("strain under the probe (largest |principal|): mean {:.2f} %, peak {:.2f} %\n",
                            f.probe_strain.mean * 100, f.probe_strain.peak * 100);
-  std::cout << fmt::format("wrote {}\n", out.destination().string());
+  std::cout << fmt::format("wrote {}\n", out->destination().string());
+  return 0;
+}
+
+/// The end of `solve meshless` and `cut`: the geometry's time counted as set-up, the samples' distances to the cut,
+/// the files written and committed, the summary printed.
+int finish_meshless_run(const core::Case& c, const core::Geometry& g, double geometry_seconds, ModelResult* r,
+                        core::OutputDirectory* out, Progress* progress) {
+  r->details["geometry_seconds"] = geometry_seconds;
+  describe_samples_near_cut(g, r);
+  r->setup_seconds += geometry_seconds;
+  r->total_seconds += geometry_seconds;
+  write_model_files(*out, c, *r);
+  out->commit();
+  progress->done();
+  print_summary(*r);
+  std::cout << fmt::format("wrote {}\n", out->destination().string());
   return 0;
 }
 
@@ -87,16 +136,7 @@ int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
   ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); });
-  r.details["geometry_seconds"] = geometry_seconds;
-  describe_samples_near_cut(g, &r);
-  r.setup_seconds += geometry_seconds;
-  r.total_seconds += geometry_seconds;
-  write_model_files(out, c, r);
-  out.commit();
-  progress.done();
-  print_summary(r);
-  std::cout << fmt::format("wrote {}\n", out.destination().string());
-  return 0;
+  return finish_meshless_run(c, g, geometry_seconds, &r, &out, &progress);
 }
 
 /// `tissue cut`: the EFG model with the case's incision made progressively, as a scalpel does (/cut/steps
@@ -115,16 +155,7 @@ int run_cut(const std::string& config, const std::string& out_dir) {
   const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
   ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); }, {}, /*progressive_cut=*/true);
-  r.details["geometry_seconds"] = geometry_seconds;
-  describe_samples_near_cut(g, &r);
-  r.setup_seconds += geometry_seconds;
-  r.total_seconds += geometry_seconds;
-  write_model_files(out, c, r);
-  out.commit();
-  progress.done();
-  print_summary(r);
-  std::cout << fmt::format("wrote {}\n", out.destination().string());
-  return 0;
+  return finish_meshless_run(c, g, geometry_seconds, &r, &out, &progress);
 }
 
 }  // namespace
@@ -134,7 +165,9 @@ void add_solve_commands(CLI::App& app) {
   group->require_subcommand(1);
 
   auto* fem = group->add_subcommand(
-      "fem", "deal.II FEM reference: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json");
+      "fem",
+      "deal.II FEM reference: VTU per output step (pvtu + one piece per MPI process), samples.csv (eq. 33, mm), "
+      "timings.json, case.json. Runs distributed under `mpirun -np N` (docs/FEM_REFERENCE.md)");
   static std::string fem_config, fem_out;
   fem->add_option("CONFIG", fem_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   fem->add_option("--out", fem_out, "Output folder (written atomically)")->required();

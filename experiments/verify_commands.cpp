@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <fstream>
-#include <future>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -96,9 +95,9 @@ struct LungLevel {
   std::string error;  ///< non-empty when the solve failed (e.g. Newton did not converge)
 };
 
-/// Solve every case at every mesh size. The geometries are built one after the other (Gmsh is a process-wide
-/// singleton) and the cases of one level are solved concurrently (independent deal.II objects), so the
-/// study uses both cores even where UMFPACK runs single-threaded.
+/// Solve every case at every mesh size, one after the other: Gmsh is a process-wide singleton, and the FEM's
+/// Trilinos objects make MPI calls, which MPI (initialised for one thread at a time) does not allow from
+/// concurrent threads. Each solve assembles with all the cores.
 std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& opt, const std::vector<core::Case>& cases,
                                                        Progress* progress) {
   std::vector<std::vector<LungLevel>> levels(cases.size());
@@ -111,16 +110,9 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
       g_options.build_node_cloud = false;
       geometries.push_back(core::build_geometry(c, g_options));
     }
-    std::vector<std::future<reference_fem::FemRunResult>> runs;
-    for (std::size_t i = 0; i < cases.size(); ++i)
-      runs.push_back(std::async(std::launch::async, [&, i] {
-        reference_fem::FemRunOptions o;
-        o.threads = cases.size() > 1 ? 1u : 2u;  // two cores in all
-        return reference_fem::run_case(cases[i], geometries[i], o);
-      }));
     for (std::size_t i = 0; i < cases.size(); ++i) {
       try {
-        levels[i].push_back({h, runs[i].get()});
+        levels[i].push_back({h, reference_fem::run_case(cases[i], geometries[i])});
       } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
         levels[i].push_back({h, {}, e.what()});
         std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, h, e.what());

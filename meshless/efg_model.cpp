@@ -519,6 +519,22 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
   return attempt;
 }
 
+void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
+  if (!set_up_) throw std::logic_error("EfgModel::restart before setup_system");
+  problem_.loaded_faces = std::move(loaded_faces);
+  problem_.traction = std::move(traction);
+  boundary_ = make_boundary_terms(problem_, surface_, alpha_);  // eq. 24's traction term for the new load
+  stats_.loaded_area = boundary_.loaded_area;
+  states_.assign(states_.size(), core::KelvinState{});
+  for (core::Vector6& e : strain_) e.setZero();
+  for (core::Vector6& s : stress_) s.setZero();
+  u_.setZero();
+  residual_.setZero();
+  external_.setZero();
+  records_.clear();
+  matrix_current_ = false;  // the factorisation (factorisation_, factorised_dt_) is kept for solve_step to reuse
+}
+
 void EfgModel::run(const StepObserver& observer) {
   setup_system();
   const int n = static_cast<int>(problem_.step_times.size());

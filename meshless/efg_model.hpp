@@ -109,6 +109,13 @@ class EfgModel {
   /// @throws core::InadmissibleStrain when a strain leaves the law's admissible range (at any iteration)
   /// @throws core::StepCutBackFailed when even the smallest step fails, with every attempt
   StepRecord solve_step(int step);
+  /// Start again from the undeformed body (U = 0, fresh Kelvin history, no step records) under a new traction,
+  /// keeping what setup_system() built (MLS tables, sparsity, penalty terms, solver choice) and the last
+  /// factorised tangent, which solve_step() reuses while it still contracts the residual. Runs many loads on one
+  /// node cloud (the surrogate's training, meshless/surrogate_training.hpp) at the cost of the time steps alone.
+  /// @param loaded_faces #boundary faces mask of the loaded faces (empty: the faces tagged load)
+  /// @param traction t-bar [Pa] at full load on those faces (eq. 24), scaled by problem().load_scale
+  void restart(std::vector<char> loaded_faces, VectorField traction);
   /// Replace the cut by `cut` (a progressive incision: the cut advanced) after setup_system(), keeping the
   /// history. A local update (paper §4): the quadrature is rebuilt (cheap geometry), but only the points that are
   /// new or whose covering nodes change weight get their shape functions evaluated again; the others keep their

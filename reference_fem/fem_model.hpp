@@ -1,6 +1,12 @@
 #pragma once
 // The FEM reference on a load case: what `tissue solve fem`, the tests and the mesh-convergence study
 // call. deal.II-free header.
+//
+// MPI: the solve is collective over FemRunOptions::communicator. Every process passes the same mesh, case
+// and options (reference_fem/geometry_broadcast.hpp sends rank 0's geometry); the mesh is partitioned, each
+// process assembles and keeps the history of its own cells, and every process gets the same FemRunResult.
+#include <mpi.h>
+
 #include <Eigen/Core>
 #include <functional>
 #include <map>
@@ -15,10 +21,15 @@
 namespace reference_fem {
 
 struct FemRunOptions {
-  /// When non-empty, write `<vtu_prefix>_NNNN.vtu` every `case.output.every` steps and at the last step.
+  /// When non-empty, write `<vtu_prefix>_NNNN.pvtu` and its pieces `<vtu_prefix>_NNNN.<rank>.vtu` (one per
+  /// MPI process) every `case.output.every` steps and at the last step.
   std::string vtu_prefix;
   double sample_tolerance = 3e-3;  ///< [m] how far a sample may lie outside the faceted mesh
-  unsigned int threads = 2;
+  /// The processes that solve together: every process of the job (mpirun -np N), or MPI_COMM_SELF for a
+  /// process that solves alone.
+  MPI_Comm communicator = MPI_COMM_WORLD;
+  /// Assembly threads per process; 0 keeps deal.II's choice (the node's cores shared among its processes).
+  unsigned int threads = 0;
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
   /// When not null, samples behind the crack front are evaluated on the lip core::RuledSurface::side gives them.
   const core::RuledSurface* cut = nullptr;
@@ -34,11 +45,14 @@ struct FemRunResult {
   std::vector<StepReport> steps;
   std::map<std::string, double> sections;  ///< TimerOutput totals [s]: setup, assembly, solve, ...
   double total_seconds = 0.0;
+  double peak_memory_mb = 0.0;  ///< sum over the processes of their peak resident set size [MB]
   std::size_t n_dofs = 0;
   std::size_t n_cells = 0;
   double load_area = 0.0;  ///< [m^2]
   int crack_faces = 0;     ///< boundary faces tagged FaceTag::crack (both sides of the cut)
-  std::vector<std::string> vtu_files;
+  std::vector<std::string> vtu_files;  ///< the pvtu records
+  int mpi_processes = 1;
+  std::vector<unsigned int> cells_per_process;  ///< locally owned cells of each process (the partition)
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
   BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
   core::SmallestMargin smallest_margin;  ///< smallest 1 + 2k lambda over the converged steps, and where
@@ -53,6 +67,16 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
                            const BoundaryConditions& conditions, const std::vector<double>& times,
                            const Eigen::MatrixXd& sample_points, const FemRunOptions& options = {},
                            int output_every = 1);
+
+/// A case on its FEM mesh as a boundary-value problem: fixed faces clamped (strong Dirichlet), the load patch
+/// under core::load_program's traction and ramp, its step times, and the case's discretisation and solvers.
+struct CaseProblem {
+  SolverParameters parameters;
+  BoundaryConditions conditions;
+  std::vector<double> times;
+  double load_area = 0.0;  ///< [m^2]
+};
+CaseProblem problem_from_case(const core::Case& c, const core::TetMesh& mesh);
 
 /// Solve the case on geometry.fem_mesh: fixed faces clamped (strong Dirichlet), the load patch under a
 /// uniform traction force(t)/area ramped by LoadSpec::force_scale, time steps of TimeSpec. The strain is

@@ -54,15 +54,56 @@ struct BoundaryConditions {
   std::vector<TractionCondition> tractions;
 };
 
+/// How each Newton system K du = R (K = the consistent tangent, non-symmetric when k != 0) is solved.
+/// Both are right-preconditioned GMRES on the exact tangent, so Newton converges as with an exact solve;
+/// they differ in the preconditioner, which may come from an earlier tangent (rebuilt when GMRES slows down).
+enum class LinearSolverType {
+  /// Algebraic multigrid: Trilinos ML smoothed aggregation with the six rigid-body modes as its near null
+  /// space. Memory and time grow about linearly with the DOFs; runs on any number of MPI processes.
+  amg,
+  /// The UMFPACK LU factors of an earlier tangent. Fastest for small problems (a few thousand DOFs), but
+  /// the 3-D fill-in makes it grow like DOFs^1.5-2 in time and memory. One MPI process only.
+  direct,
+};
+
+/// The linear solver of the Newton systems: GMRES on the exact tangent, right-preconditioned (the true residual
+/// is measured). Defaults per type: for_type().
+struct LinearSolverParameters {
+  LinearSolverType type = LinearSolverType::amg;
+  /// GMRES stops at eta_k ||R_k||, eta_k = max(tolerance, min(0.1, forcing * r_k)), r_k the relative Newton
+  /// residual (inexact Newton with a quadratic forcing term, Eisenstat & Walker 1996): far from the solution a
+  /// rough solve does as well as an exact one, and near it eta_k r_k ~ r_k^2 keeps Newton quadratic.
+  /// forcing = 0, or a linear material (k = 0): always `tolerance`.
+  double tolerance = 1e-10;
+  double forcing = 0.01;
+  int max_iterations = 500;
+  /// Rebuild the preconditioner (LU factors or AMG hierarchy) from the current tangent when the previous
+  /// GMRES solve needed more than this many iterations per decade of residual reduction (a stale
+  /// preconditioner converges more slowly).
+  double rebuild_after = 8.0;
+
+  /// The defaults of each type.
+  static LinearSolverParameters for_type(LinearSolverType type);
+};
+
+inline LinearSolverParameters LinearSolverParameters::for_type(LinearSolverType type) {
+  LinearSolverParameters p;
+  p.type = type;
+  if (type == LinearSolverType::direct) {
+    // LU factors of a nearby tangent need a few iterations for all 12 decades; refactor beyond 15.
+    p.tolerance = 1e-12;
+    p.forcing = 0.0;
+    p.max_iterations = 200;
+    p.rebuild_after = 15.0 / 12.0;
+  }
+  return p;
+}
+
 /// Newton's method on the residual of eq. 21 with the consistent tangent of the Kelvin law.
 struct NewtonParameters {
   double tolerance = 1e-8;  ///< on ||R|| / max(||R_0||, ||F_ext||, ||F_int||), constrained rows excluded
   int max_iterations = 25;
-  /// Each Newton system K du = R (K = consistent tangent) is solved to this relative residual by GMRES,
-  /// preconditioned with the LU factors (UMFPACK) of an earlier tangent; refactor when GMRES needs more
-  /// than `refactor_after` iterations. Tight enough that Newton converges as with an exact solve.
-  double linear_tolerance = 1e-12;
-  int refactor_after = 15;
+  LinearSolverParameters linear;
   /// When Newton fails on a step, the step is halved and retried down to this size [s]
   /// (core/step_cutback.hpp); 0 disables the cut-back.
   double min_step = 0.0;
@@ -72,7 +113,9 @@ struct SolverParameters {
   core::KelvinParameters material;
   int degree = 2;          ///< FE_SimplexP degree (QGaussSimplex with degree+1 points per direction)
   NewtonParameters newton;
-  unsigned int threads = 2;  ///< WorkStream assembly threads
+  /// WorkStream assembly threads per MPI process; 0 keeps deal.II's choice (the node's cores divided
+  /// among the MPI processes on it, set by Utilities::MPI::MPI_InitFinalize).
+  unsigned int threads = 0;
 };
 
 /// What one time step did (reported per step in timings.json).
@@ -81,7 +124,7 @@ struct StepReport {
   double time = 0.0;          ///< t_{n+1} [s]
   int newton_iterations = 0;  ///< number of linear solves
   int linear_iterations = 0;  ///< GMRES iterations over the step
-  int factorizations = 0;     ///< LU factorizations of the tangent during the step
+  int preconditioner_builds = 0;  ///< LU factorizations or AMG set-ups during the step
   std::vector<double> residuals;  ///< relative residual before each solve, then the converged one
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;

@@ -1,10 +1,12 @@
 #include "reference_fem/sample_evaluator.hpp"
 
+#include <deal.II/base/mpi.h>
 #include <deal.II/fe/fe.h>
 #include <deal.II/grid/grid_tools.h>
 #include <deal.II/grid/grid_tools_cache.h>
 
 #include <limits>
+#include <map>
 #include <set>
 #include <sstream>
 #include <stdexcept>
@@ -41,10 +43,11 @@ bool on_lip(const core::RuledSurface& cut, const typename Triangulation<3>::acti
 
 }  // namespace
 
-SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>& dof_handler,
-                                 const Eigen::MatrixXd& points, double tolerance, const core::RuledSurface* cut)
+SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const Triangulation<3>& whole_mesh,
+                                 const DoFHandler<3>& dof_handler, const Eigen::MatrixXd& points, double tolerance,
+                                 const core::RuledSurface* cut)
     : dof_handler_(dof_handler) {
-  const Triangulation<3>& tria = dof_handler.get_triangulation();
+  const Triangulation<3>& tria = whole_mesh;
   GridTools::Cache<3, 3> cache(tria, mapping);
   typename Triangulation<3>::active_cell_iterator hint;
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
@@ -103,42 +106,76 @@ SampleEvaluator::SampleEvaluator(const Mapping<3>& mapping, const DoFHandler<3>&
         throw std::runtime_error(msg.str());
       }
     }
-    location.cell = typename DoFHandler<3>::active_cell_iterator(&tria, found.first->level(), found.first->index(),
-                                                                &dof_handler);
+    location.cell_id = found.first->id();
     locations_.push_back(location);
     offsets_.push_back(offset);
   }
+
+  // The process that owns a point's cell evaluates it (coarse cells: the meshes are not refined).
+  std::map<CellId, typename DoFHandler<3>::active_cell_iterator> owned;
+  for (const auto& cell : dof_handler.active_cell_iterators())
+    if (cell->is_locally_owned()) owned.emplace(cell->id(), cell);
+  for (Location& location : locations_) {
+    const auto it = owned.find(location.cell_id);
+    if (it != owned.end()) location.cell = it->second;
+  }
 }
 
-Eigen::MatrixXd SampleEvaluator::evaluate(const Vector<double>& solution) const {
+Eigen::MatrixXd SampleEvaluator::evaluate(const TrilinosWrappers::MPI::Vector& solution) const {
   const FiniteElement<3>& fe = dof_handler_.get_fe();
   Eigen::MatrixXd u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(locations_.size()), 3);
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (std::size_t i = 0; i < locations_.size(); ++i) {
+    if (locations_[i].cell.state() != IteratorState::valid) continue;  // owned by another process
     locations_[i].cell->get_dof_indices(dofs);
     for (unsigned int k = 0; k < fe.n_dofs_per_cell(); ++k) {
       const unsigned int c = fe.system_to_component_index(k).first;
       u(static_cast<Eigen::Index>(i), c) += solution(dofs[k]) * fe.shape_value(k, locations_[i].unit_point);
     }
   }
+  // Each point has exactly one owner: the sum over the processes gathers the values.
+  const MPI_Comm communicator = solution.get_mpi_communicator();
+  Utilities::MPI::sum(ArrayView<const double>(u.data(), u.size()), communicator, ArrayView<double>(u.data(), u.size()));
   return u;
 }
 
-Eigen::MatrixXd vertex_displacements(const DoFHandler<3>& dof_handler, const Vector<double>& solution) {
+Eigen::MatrixXd vertex_displacements(const DoFHandler<3>& dof_handler, const TrilinosWrappers::MPI::Vector& solution,
+                                     const core::TetMesh& mesh) {
   const FiniteElement<3>& fe = dof_handler.get_fe();
-  const Triangulation<3>& tria = dof_handler.get_triangulation();
-  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(tria.n_vertices()), 3);
+  const MPI_Comm communicator = solution.get_mpi_communicator();
+  const int rank = static_cast<int>(Utilities::MPI::this_mpi_process(communicator));
+  const Eigen::Index n_vertices = mesh.num_vertices();
+  Eigen::MatrixXd u = Eigen::MatrixXd::Zero(n_vertices, 3);
+  // A vertex shared by several processes is reported by the lowest rank among them.
+  std::vector<int> reporter(static_cast<std::size_t>(n_vertices), std::numeric_limits<int>::max());
+  std::vector<std::pair<int, Eigen::Vector3d>> values;
   std::vector<types::global_dof_index> dofs(fe.n_dofs_per_cell());
   for (const auto& cell : dof_handler.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
+    const auto tet = static_cast<Eigen::Index>(cell->id().get_coarse_cell_id());
     cell->get_dof_indices(dofs);
     for (const unsigned int v : cell->vertex_indices()) {
+      // The mesh vertex at this cell vertex: the tet's corner at the same position (the four differ).
+      int vertex = -1;
+      for (int k = 0; k < 4; ++k) {
+        const int candidate = mesh.tets(tet, k);
+        if (Point<3>(mesh.vertices(candidate, 0), mesh.vertices(candidate, 1), mesh.vertices(candidate, 2)) ==
+            cell->vertex(v))
+          vertex = candidate;
+      }
+      if (vertex < 0) throw std::logic_error("vertex_displacements: the triangulation was not built from this mesh");
       const Point<3> unit = cell->reference_cell().template vertex<3>(v);
       Eigen::Vector3d value = Eigen::Vector3d::Zero();
       for (unsigned int k = 0; k < fe.n_dofs_per_cell(); ++k)
         value(fe.system_to_component_index(k).first) += solution(dofs[k]) * fe.shape_value(k, unit);
-      u.row(static_cast<Eigen::Index>(cell->vertex_index(v))) = value.transpose();
+      values.emplace_back(vertex, value);
+      reporter[static_cast<std::size_t>(vertex)] = rank;
     }
   }
+  Utilities::MPI::min(ArrayView<const int>(reporter), communicator, ArrayView<int>(reporter));
+  for (const auto& [vertex, value] : values)
+    if (reporter[static_cast<std::size_t>(vertex)] == rank) u.row(vertex) = value.transpose();
+  Utilities::MPI::sum(ArrayView<const double>(u.data(), u.size()), communicator, ArrayView<double>(u.data(), u.size()));
   return u;
 }
 

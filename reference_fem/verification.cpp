@@ -185,7 +185,7 @@ CantileverLevel run_cantilever(const CantileverOptions& o, int subdivisions) {
 
   Eigen::MatrixXd tip(1, 3);
   tip << o.length, 0.0, o.width / 2;
-  const SampleEvaluator evaluator(solver.mapping(), solver.dof_handler(), tip, 1e-9);
+  const SampleEvaluator evaluator(solver.mapping(), tria, solver.dof_handler(), tip, 1e-9);
   level.tip_deflection = evaluator.evaluate(solver.solution())(0, 1);
   level.exact_tip_deflection = exact.displacement(tip.row(0).transpose())(1);
   level.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -3,26 +3,32 @@
 #include <deal.II/base/multithread_info.h>
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/base/work_stream.h>
+#include <deal.II/distributed/tria_base.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_simplex_p.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/grid/filtered_iterator.h>
 #include <deal.II/lac/dynamic_sparsity_pattern.h>
 #include <deal.II/lac/full_matrix.h>
 #include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/solver_gmres.h>
 #include <deal.II/lac/sparse_direct.h>
+#include <deal.II/lac/sparsity_tools.h>
 #include <deal.II/numerics/data_out.h>
 #include <deal.II/numerics/vector_tools.h>
 
+#include <fmt/format.h>
+
 #include <Eigen/Core>
 #include <Eigen/Eigenvalues>
-#include <chrono>
 #include <algorithm>
+#include <array>
+#include <chrono>
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 
 #include "core/voigt.hpp"
+#include "reference_fem/amg_preconditioner.hpp"
 
 namespace reference_fem {
 namespace {
@@ -36,9 +42,63 @@ core::Vector6 to_voigt(const SymmetricTensor<2, 3>& e) {
   return v;
 }
 
+// The smallest 1 + 2k lambda over all processes, with the time, point and strain of the process that holds it,
+// so that every process sees the same margin and, past the admissible range, throws the same error.
+core::SmallestMargin smallest_over_processes(const core::SmallestMargin& local, MPI_Comm comm) {
+  if (Utilities::MPI::n_mpi_processes(comm) == 1) return local;
+  const Utilities::MPI::MinMaxAvg extremes = Utilities::MPI::min_max_avg(local.margin, comm);
+  std::array<double, 11> packed{};
+  packed[0] = local.margin;
+  packed[1] = local.time;
+  for (int i = 0; i < 3; ++i) packed[2 + i] = local.point(i);
+  for (int i = 0; i < 6; ++i) packed[5 + i] = local.strain(i);
+  const int owner = static_cast<int>(extremes.min_index);
+  const int status = MPI_Bcast(packed.data(), static_cast<int>(packed.size()), MPI_DOUBLE, owner, comm);
+  AssertThrowMPI(status);
+  core::SmallestMargin global;
+  global.margin = packed[0];
+  global.time = packed[1];
+  for (int i = 0; i < 3; ++i) global.point(i) = packed[2 + i];
+  for (int i = 0; i < 6; ++i) global.strain(i) = packed[5 + i];
+  return global;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
+
+MPI_Comm communicator_of(const Triangulation<3>& triangulation) {
+  if (const auto* parallel = dynamic_cast<const parallel::TriangulationBase<3>*>(&triangulation))
+    return parallel->get_communicator();
+  return MPI_COMM_SELF;
+}
+
+using LocallyOwnedCell = FilteredIterator<typename DoFHandler<3>::active_cell_iterator>;
+
+LocallyOwnedCell first_owned(const DoFHandler<3>& dof_handler) {
+  return LocallyOwnedCell(IteratorFilters::LocallyOwnedCell(), dof_handler.begin_active());
+}
+LocallyOwnedCell end_owned(const DoFHandler<3>& dof_handler) {
+  return LocallyOwnedCell(IteratorFilters::LocallyOwnedCell(), dof_handler.end());
+}
+
+/// UMFPACK factors (a serial dealii::Vector operator) as the preconditioner of GMRES on Trilinos vectors of
+/// one process.
+class UmfpackPreconditioner {
+ public:
+  explicit UmfpackPreconditioner(const SparseDirectUMFPACK& factors) : factors_(factors) {}
+  void vmult(TrilinosWrappers::MPI::Vector& dst, const TrilinosWrappers::MPI::Vector& src) const {
+    in_.reinit(src.size(), true);
+    out_.reinit(src.size(), true);
+    std::copy(src.begin(), src.end(), in_.begin());
+    factors_.vmult(out_, in_);
+    std::copy(out_.begin(), out_.end(), dst.begin());
+  }
+
+ private:
+  const SparseDirectUMFPACK& factors_;
+  mutable Vector<double> in_, out_;
+};
 
 ComponentMask mask_of(const std::array<bool, 3>& components) {
   return ComponentMask(std::vector<bool>(components.begin(), components.end()));
@@ -75,17 +135,23 @@ struct ViscoelasticSolver::ScratchData {
               const Quadrature<2>& face_quadrature)
       : fe_values(mapping, fe, quadrature, update_gradients | update_JxW_values | update_quadrature_points),
         fe_face_values(mapping, fe, face_quadrature, update_values | update_quadrature_points | update_JxW_values),
-        strains(quadrature.size()) {}
+        strains(quadrature.size()),
+        B(6 * quadrature.size(), fe.n_dofs_per_cell()),
+        DB(6 * quadrature.size(), fe.n_dofs_per_cell()) {}
   ScratchData(const ScratchData& other)
       : fe_values(other.fe_values.get_mapping(), other.fe_values.get_fe(), other.fe_values.get_quadrature(),
                   other.fe_values.get_update_flags()),
         fe_face_values(other.fe_face_values.get_mapping(), other.fe_face_values.get_fe(),
                        other.fe_face_values.get_quadrature(), other.fe_face_values.get_update_flags()),
-        strains(other.strains.size()) {}
+        strains(other.strains.size()),
+        B(other.B.rows(), other.B.cols()),
+        DB(other.DB.rows(), other.DB.cols()) {}
 
   FEValues<3> fe_values;
   FEFaceValues<3> fe_face_values;
   std::vector<SymmetricTensor<2, 3>> strains;
+  Eigen::MatrixXd B, DB;  // the B_q and D_q B_q JxW_q of all quadrature points, stacked (6 n_q by n)
+  Eigen::MatrixXd K;
 };
 
 struct ViscoelasticSolver::CopyData {
@@ -100,6 +166,7 @@ struct ViscoelasticSolver::CopyData {
 ViscoelasticSolver::ViscoelasticSolver(const Triangulation<3>& triangulation, const SolverParameters& parameters,
                                        BoundaryConditions conditions)
     : triangulation_(triangulation),
+      mpi_communicator_(communicator_of(triangulation)),
       parameters_(parameters),
       conditions_(std::move(conditions)),
       law_(parameters.material),
@@ -109,27 +176,49 @@ ViscoelasticSolver::ViscoelasticSolver(const Triangulation<3>& triangulation, co
       timer_(timer_sink_, TimerOutput::never, TimerOutput::wall_times) {
   if (parameters.degree < 1 || parameters.degree > 3)
     throw std::invalid_argument("ViscoelasticSolver: degree must be 1, 2 or 3");
-  MultithreadInfo::set_thread_limit(std::max(1u, parameters.threads));
+  if (parameters.newton.linear.type == LinearSolverType::direct &&
+      Utilities::MPI::n_mpi_processes(mpi_communicator_) > 1)
+    throw std::invalid_argument(
+        "ViscoelasticSolver: the direct linear solver (UMFPACK) runs on one MPI process; set /fem/linear_solver "
+        "to \"amg\" to solve on " + std::to_string(Utilities::MPI::n_mpi_processes(mpi_communicator_)) +
+        " processes");
+  if (parameters.threads > 0) MultithreadInfo::set_thread_limit(parameters.threads);
 }
+
+ViscoelasticSolver::~ViscoelasticSolver() = default;
 
 void ViscoelasticSolver::setup_system() {
   TimerOutput::Scope scope(timer_, "setup");
   dof_handler_.distribute_dofs(fe_);
+  locally_owned_dofs_ = dof_handler_.locally_owned_dofs();
+  DoFTools::extract_locally_relevant_dofs(dof_handler_, locally_relevant_dofs_);
 
   zero_constraints_.clear();
+  zero_constraints_.reinit(locally_relevant_dofs_);
   for (const auto& d : conditions_.dirichlet)
     VectorTools::interpolate_boundary_values(mapping_, dof_handler_, d.boundary_id, Functions::ZeroFunction<3>(3),
                                              zero_constraints_, mask_of(d.components));
   zero_constraints_.close();
 
-  DynamicSparsityPattern dsp(dof_handler_.n_dofs());
+  DynamicSparsityPattern dsp(locally_relevant_dofs_);
   DoFTools::make_sparsity_pattern(dof_handler_, dsp, zero_constraints_, false);
-  sparsity_pattern_.copy_from(dsp);
-  system_matrix_.reinit(sparsity_pattern_);
+  SparsityTools::distribute_sparsity_pattern(dsp, locally_owned_dofs_, mpi_communicator_, locally_relevant_dofs_);
+  system_matrix_.reinit(locally_owned_dofs_, locally_owned_dofs_, dsp, mpi_communicator_);
+  solution_.reinit(locally_owned_dofs_, mpi_communicator_);
+  ghosted_solution_.reinit(locally_owned_dofs_, locally_relevant_dofs_, mpi_communicator_);
+  newton_update_.reinit(locally_owned_dofs_, mpi_communicator_);
+  system_rhs_.reinit(locally_owned_dofs_, mpi_communicator_);
+
+  amg_.reset();
   factorization_.reset();
-  solution_.reinit(dof_handler_.n_dofs());
-  newton_update_.reinit(dof_handler_.n_dofs());
-  system_rhs_.reinit(dof_handler_.n_dofs());
+  rebuild_ = true;
+  if (parameters_.newton.linear.type == LinearSolverType::direct) {
+    direct_pattern_.copy_from(dsp);  // one process: the whole pattern
+    direct_matrix_.reinit(direct_pattern_);
+  } else {
+    rigid_body_modes_ = rigid_body_modes(dof_handler_, mapping_, locally_owned_dofs_,
+                                         system_matrix_.trilinos_matrix().DomainMap());
+  }
 
   n_q_points_ = QGaussSimplex<3>(static_cast<unsigned int>(parameters_.degree + 1)).size();
   history_.assign(static_cast<std::size_t>(triangulation_.n_active_cells()) * n_q_points_, PointHistory{});
@@ -140,12 +229,14 @@ void ViscoelasticSolver::apply_dirichlet_values(double t_new) {
   // Start Newton from a displacement that already satisfies u = g(t_{n+1}) on the Dirichlet rows; the
   // updates then obey the homogeneous constraints.
   AffineConstraints<double> values;
+  values.reinit(locally_relevant_dofs_);
   for (const auto& d : conditions_.dirichlet) {
     VectorTools::interpolate_boundary_values(mapping_, dof_handler_, d.boundary_id, DirichletFunction(d, t_new), values,
                                              mask_of(d.components));
   }
   values.close();
   values.distribute(solution_);
+  ghosted_solution_ = solution_;
 }
 
 void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cell_iterator& cell,
@@ -160,12 +251,14 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
 
   const FEValuesExtractors::Vector u(0);
   scratch.fe_values.reinit(cell);
-  scratch.fe_values[u].get_function_symmetric_gradients(solution_, scratch.strains);
+  scratch.fe_values[u].get_function_symmetric_gradients(ghosted_solution_, scratch.strains);
 
-  // B columns: engineering Voigt strain of each shape function, so that K = sum B^T D B JxW (eq. 21)
-  // with D = E_k dN/deps, the consistent tangent of eq. 13 (non-symmetric when k != 0).
-  Eigen::Matrix<double, 6, Eigen::Dynamic> B(6, n);
-  Eigen::MatrixXd K = Eigen::MatrixXd::Zero(n, n);
+  // B_q columns: engineering Voigt strain of each shape function at point q, so that
+  // K = sum_q B_q^T D_q B_q JxW_q (eq. 21) with D = E_k dN/deps, the consistent tangent of eq. 13
+  // (non-symmetric when k != 0). Stacked over q, K is one product B^T (DB): one large GEMM instead of n_q
+  // small ones.
+  Eigen::MatrixXd& B = scratch.B;
+  Eigen::MatrixXd& DB = scratch.DB;
   Eigen::VectorXd internal = Eigen::VectorXd::Zero(n);
   const std::size_t first = cell->active_cell_index() * n_q_points_;
   copy.margin = core::SmallestMargin{};
@@ -176,15 +269,17 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
       copy.margin.update(law_.admissibility_margin(strain), step_time_, Eigen::Vector3d(x[0], x[1], x[2]), strain);
     }
     const core::KelvinResponse response = law_.update(history_[first + q].state, strain, step_dt_);
-    for (unsigned int i = 0; i < n; ++i) B.col(i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
+    const auto Bq = B.middleRows<6>(6 * q);
+    for (unsigned int i = 0; i < n; ++i) B.block<6, 1>(6 * q, i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
     const double jxw = scratch.fe_values.JxW(q);
-    K.noalias() += B.transpose() * (response.tangent * B) * jxw;
-    internal.noalias() += B.transpose() * response.stress * jxw;
+    DB.middleRows<6>(6 * q).noalias() = (response.tangent * jxw) * Bq;
+    internal.noalias() += Bq.transpose() * (response.stress * jxw);
   }
+  scratch.K.noalias() = B.transpose() * DB;
   for (unsigned int i = 0; i < n; ++i) {
     copy.cell_rhs(i) = -internal(i);
     copy.cell_internal(i) = internal(i);
-    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = K(i, j);
+    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = scratch.K(i, j);
   }
 
   // Uniform tractions (the load patch: force(t) / patch area).
@@ -217,12 +312,14 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
   step_dt_ = dt;
   system_matrix_ = 0.0;
   system_rhs_ = 0.0;
-  Vector<double> external(dof_handler_.n_dofs()), internal(dof_handler_.n_dofs());
+  TrilinosWrappers::MPI::Vector external(locally_owned_dofs_, mpi_communicator_);
+  TrilinosWrappers::MPI::Vector internal(locally_owned_dofs_, mpi_communicator_);
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
   iterate_margin_ = core::SmallestMargin{};
+  // Locally owned cells only; rows owned by another process are sent to it by compress().
   WorkStream::run(
-      dof_handler_.begin_active(), dof_handler_.end(),
+      first_owned(dof_handler_), end_owned(dof_handler_),
       [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
         local_assemble(cell, s, c);
       },
@@ -234,41 +331,82 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
         zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
       },
       scratch, CopyData());
+  system_matrix_.compress(VectorOperation::add);
+  system_rhs_.compress(VectorOperation::add);
+  external.compress(VectorOperation::add);
+  internal.compress(VectorOperation::add);
   external_force_norm_ = external.l2_norm();
   internal_force_norm_ = internal.l2_norm();
+  iterate_margin_ = smallest_over_processes(iterate_margin_, mpi_communicator_);
   // Past the law's admissible range the tangent is singular and no equilibrium exists: stop, naming the point.
   if (!(iterate_margin_.margin > 0.0))
     throw core::InadmissibleStrain("FEM reference", t_new, iterate_margin_.point, iterate_margin_.strain, law_);
   return system_rhs_.l2_norm();
 }
 
-void ViscoelasticSolver::solve() {
+void ViscoelasticSolver::build_preconditioner() {
+  ++preconditioner_builds_;
+  rebuild_ = false;
+  if (parameters_.newton.linear.type == LinearSolverType::direct) {
+    direct_matrix_.copy_from(system_matrix_);
+    factorization_ = std::make_unique<SparseDirectUMFPACK>();
+    factorization_->initialize(direct_matrix_);
+    return;
+  }
+  AmgOptions options;
+  options.higher_order_elements = parameters_.degree > 1;
+  amg_ = std::make_unique<TrilinosWrappers::PreconditionAMG>();
+  amg_->initialize(system_matrix_, ml_parameters(system_matrix_, *rigid_body_modes_, options));
+}
+
+void ViscoelasticSolver::solve(double eta) {
   TimerOutput::Scope scope(timer_, "solve");
   // The consistent tangent is non-symmetric for k != 0 (docs/MATERIAL.md §1.4), so: GMRES on the exact
-  // tangent, preconditioned by the LU factors of an earlier tangent. The tangent changes only through
-  // dN/deps (a few per cent for tissue strains), so a few GMRES iterations reach 1e-12 and the costly
-  // factorization is reused over Newton iterations and time steps.
-  const auto factorize = [this] {
-    factorization_ = std::make_unique<SparseDirectUMFPACK>();
-    factorization_->initialize(system_matrix_);
-    refactor_ = false;
-    ++factorizations_;
+  // tangent, right-preconditioned (it measures the true residual) by a preconditioner of an earlier tangent.
+  // The tangent changes only through dN/deps (a few per cent for tissue strains), so the costly
+  // preconditioner (LU factors or AMG hierarchy) is reused over Newton iterations and time steps, and
+  // rebuilt when GMRES slows down.
+  const LinearSolverParameters& linear = parameters_.newton.linear;
+  if (rebuild_ || (!amg_ && !factorization_)) build_preconditioner();
+  const double rhs_norm = system_rhs_.l2_norm();
+  const double target = eta * rhs_norm;
+  int iterations = 0;
+  double reached = rhs_norm;
+  const auto run_gmres = [&] {
+    newton_update_ = 0.0;
+    SolverControl control(static_cast<unsigned int>(linear.max_iterations), target, false, false);
+    SolverGMRES<TrilinosWrappers::MPI::Vector> gmres(control,
+                                                    SolverGMRES<TrilinosWrappers::MPI::Vector>::AdditionalData(62, true));
+    try {
+      if (amg_)
+        gmres.solve(system_matrix_, newton_update_, system_rhs_, *amg_);
+      else
+        gmres.solve(system_matrix_, newton_update_, system_rhs_, UmfpackPreconditioner(*factorization_));
+      iterations += static_cast<int>(control.last_step());
+      reached = control.last_value();
+      return true;
+    } catch (const SolverControl::NoConvergence&) {
+      iterations += static_cast<int>(control.last_step());
+      return false;
+    }
   };
-  if (!factorization_ || refactor_) factorize();
-  newton_update_ = 0.0;
-  const double target = parameters_.newton.linear_tolerance * system_rhs_.l2_norm();
-  SolverControl control(200, target, false, false);
-  SolverGMRES<Vector<double>> gmres(control, SolverGMRES<Vector<double>>::AdditionalData(60, true));  // right: true residual
-  try {
-    gmres.solve(system_matrix_, newton_update_, system_rhs_, *factorization_);
-  } catch (const SolverControl::NoConvergence&) {
-    factorize();  // the stored factors went stale: solve exactly with fresh ones
-    factorization_->vmult(newton_update_, system_rhs_);
+  if (!run_gmres()) {
+    build_preconditioner();  // the stored preconditioner went stale: rebuild it from this tangent
+    last_linear_iterations_ = iterations;
+    if (!run_gmres())
+      throw std::runtime_error(fmt::format(
+          "ViscoelasticSolver: GMRES ({} preconditioner, rebuilt from the current tangent) did not reduce the Newton "
+          "residual by {:.0e} within {} iterations at t = {} s. The tangent may be close to singular (a strain near "
+          "dN/deps = 0, docs/MATERIAL.md §1.4: reduce the load or refine the mesh under it); on a small mesh, "
+          "/fem/linear_solver \"direct\" solves it exactly",
+          linear.type == LinearSolverType::amg ? "AMG" : "LU", eta, linear.max_iterations, step_time_));
   }
-  last_linear_iterations_ = static_cast<int>(control.last_step());
-  if (last_linear_iterations_ > parameters_.newton.refactor_after) refactor_ = true;
+  last_linear_iterations_ = iterations;
+  const double decades = std::max(1.0, std::log10(rhs_norm / std::max(reached, 1e-300 * rhs_norm)));
+  if (iterations > linear.rebuild_after * decades) rebuild_ = true;
   zero_constraints_.distribute(newton_update_);
   solution_ += newton_update_;
+  ghosted_solution_ = solution_;
 }
 
 void ViscoelasticSolver::update_history(double dt) {
@@ -278,8 +416,9 @@ void ViscoelasticSolver::update_history(double dt) {
   std::vector<SymmetricTensor<2, 3>> strains(n_q_points_);
   const FEValuesExtractors::Vector u(0);
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
     fe_values.reinit(cell);
-    fe_values[u].get_function_symmetric_gradients(solution_, strains);
+    fe_values[u].get_function_symmetric_gradients(ghosted_solution_, strains);
     const std::size_t first = cell->active_cell_index() * n_q_points_;
     for (unsigned int q = 0; q < n_q_points_; ++q) {
       const core::KelvinState old_state = history_[first + q].state;
@@ -308,7 +447,7 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
   core::NewtonAttempt attempt;
   attempt.t_start = time_;
   attempt.t_end = t_new;
-  const Vector<double> committed = solution_;  // restored when this attempt fails
+  const TrilinosWrappers::MPI::Vector committed = solution_;  // restored when this attempt fails
   apply_dirichlet_values(t_new);
 
   const core::DivergenceTest diverging;
@@ -331,10 +470,14 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
       break;
     }
     const auto t_solve = std::chrono::steady_clock::now();
-    const int factorizations_before = factorizations_;
+    const int builds_before = preconditioner_builds_;
+    // Inexact Newton for the nonlinear law only: with k = 0 the equations are linear, and one solve to the
+    // linear tolerance ends the step.
+    const LinearSolverParameters& linear = parameters_.newton.linear;
+    const double forcing = parameters_.material.k == 0.0 ? 0.0 : linear.forcing;
     try {
-      solve();
-    } catch (const std::exception& e) {  // e.g. UMFPACK on a singular tangent
+      solve(std::max(linear.tolerance, std::min(0.1, forcing * relative)));
+    } catch (const std::exception& e) {  // GMRES failed with a fresh preconditioner: a near-singular tangent
       attempt.failure = std::string("the linear solve failed: ") + e.what();
       break;
     }
@@ -344,13 +487,14 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
     }
     report->solve_seconds += seconds_since(t_solve);
     report->linear_iterations += last_linear_iterations_;
-    report->factorizations += factorizations_ - factorizations_before;
+    report->preconditioner_builds += preconditioner_builds_ - builds_before;
     ++report->newton_iterations;
     ++attempt.iterations;
   }
   if (!attempt.converged()) {
     solution_ = committed;
-    refactor_ = true;  // the factors belong to a failed iterate
+    ghosted_solution_ = solution_;
+    rebuild_ = true;  // the preconditioner belongs to a failed iterate
     return attempt;
   }
   report->residuals = attempt.residuals;
@@ -359,6 +503,11 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
   update_history(dt);
   time_ = t_new;
   return attempt;
+}
+
+void ViscoelasticSolver::assemble_newton_system(double t_new) {
+  apply_dirichlet_values(t_new);
+  assemble_system(t_new, t_new - time_);
 }
 
 void ViscoelasticSolver::run(const std::vector<double>& times, const std::function<void(const StepReport&)>& on_step) {
@@ -370,18 +519,32 @@ void ViscoelasticSolver::run(const std::vector<double>& times, const std::functi
   }
 }
 
-void ViscoelasticSolver::output_results(const std::string& vtu_path) const {
+std::string ViscoelasticSolver::output_results(const std::string& directory, const std::string& name,
+                                               unsigned int counter) const {
   TimerOutput::Scope scope(timer_, "output");
   DataOut<3> data_out;
   data_out.attach_dof_handler(dof_handler_);
   const std::vector<std::string> names(3, "displacement");
   const std::vector<DataComponentInterpretation::DataComponentInterpretation> interpretation(
       3, DataComponentInterpretation::component_is_part_of_vector);
-  data_out.add_data_vector(solution_, names, DataOut<3>::type_dof_data, interpretation);
-  data_out.build_patches(mapping_, static_cast<unsigned int>(parameters_.degree));
-  std::ofstream out(vtu_path);
-  if (!out) throw std::runtime_error("cannot write " + vtu_path);
-  data_out.write_vtu(out);
+  data_out.add_data_vector(ghosted_solution_, names, DataOut<3>::type_dof_data, interpretation);
+  Vector<float> rank(triangulation_.n_active_cells());
+  rank = static_cast<float>(Utilities::MPI::this_mpi_process(mpi_communicator_));
+  data_out.add_data_vector(rank, "mpi_rank");
+  data_out.build_patches(mapping_, static_cast<unsigned int>(parameters_.degree));  // locally owned cells
+  // Every process writes its piece; a failed write anywhere fails the call on every process (collectively, so
+  // no process is left waiting for the others).
+  std::string record;
+  bool written = true;
+  try {
+    record = data_out.write_vtu_with_pvtu_record(directory + "/", name, counter, mpi_communicator_, 4, 0);
+  } catch (const std::exception&) {
+    written = false;
+  }
+  if (Utilities::MPI::min(written ? 1 : 0, mpi_communicator_) == 0)
+    throw std::runtime_error(fmt::format("ViscoelasticSolver: cannot write the VTU files {}/{}_{:04d}.*", directory,
+                                         name, counter));
+  return directory + "/" + record;
 }
 
 std::map<std::string, double> ViscoelasticSolver::section_seconds() const {
@@ -393,6 +556,7 @@ void ViscoelasticSolver::for_each_quadrature_point(
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   FEValues<3> fe_values(mapping_, fe_, QGaussSimplex<3>(degree + 1), update_JxW_values | update_quadrature_points);
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
     fe_values.reinit(cell);
     const std::size_t first = cell->active_cell_index() * n_q_points_;
     for (unsigned int q = 0; q < n_q_points_; ++q)
@@ -408,7 +572,8 @@ core::Vector6 ViscoelasticSolver::volume_average(
     sum += field(h) * jxw;
     volume += jxw;
   });
-  return sum / volume;
+  Utilities::MPI::sum(ArrayView<const double>(sum.data(), 6), mpi_communicator_, ArrayView<double>(sum.data(), 6));
+  return sum / Utilities::MPI::sum(volume, mpi_communicator_);
 }
 
 core::Vector6 ViscoelasticSolver::average_stress() const {
@@ -433,6 +598,9 @@ BallStrain ViscoelasticSolver::strain_in_ball(const Eigen::Vector3d& centre, dou
     b.volume += jxw;
     b.peak = std::max(b.peak, magnitude);
   });
+  weighted = Utilities::MPI::sum(weighted, mpi_communicator_);
+  b.volume = Utilities::MPI::sum(b.volume, mpi_communicator_);
+  b.peak = Utilities::MPI::max(b.peak, mpi_communicator_);
   if (b.volume > 0.0) b.mean = weighted / b.volume;
   return b;
 }
@@ -440,13 +608,15 @@ BallStrain ViscoelasticSolver::strain_in_ball(const Eigen::Vector3d& centre, dou
 double ViscoelasticSolver::boundary_area(unsigned int id) const {
   FEFaceValues<3> fe_face_values(mapping_, fe_, QGaussSimplex<2>(2), update_JxW_values);
   double area = 0.0;
-  for (const auto& cell : dof_handler_.active_cell_iterators())
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (!cell->is_locally_owned()) continue;
     for (const auto f : cell->face_indices())
       if (cell->face(f)->at_boundary() && cell->face(f)->boundary_id() == id) {
         fe_face_values.reinit(cell, f);
         for (unsigned int q = 0; q < fe_face_values.n_quadrature_points; ++q) area += fe_face_values.JxW(q);
       }
-  return area;
+  }
+  return Utilities::MPI::sum(area, mpi_communicator_);
 }
 
 }  // namespace reference_fem

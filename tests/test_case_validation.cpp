@@ -229,6 +229,11 @@ TEST_F(BadCase, UnknownGeometrySource) {
   expect_error(write_case(base_), {"/geometry/source", "builtin_lung", "liver"});
 }
 
+TEST_F(BadCase, UnknownFemLinearSolver) {
+  base_["fem"]["linear_solver"] = "cholesky";
+  expect_error(write_case(base_), {"/fem/linear_solver", "amg", "direct", "cholesky"});
+}
+
 TEST_F(BadCase, VectorWithTwoComponents) {
   base_["load"]["force"] = {0.3, 0.0};
   expect_error(write_case(base_), {"/load/force", "array of 3 numbers"});
@@ -261,7 +266,7 @@ TEST(ShippedCases, CaseMeshWritesVtuAndTheConfig) {
 
 TEST(Cli, HelpOnEverySubcommand) {
   for (const char* sub : {"", "case", "case check", "case mesh", "solve", "solve fem", "solve meshless", "cut", "verify",
-                          "verify fem", "verify meshless"}) {
+                          "verify fem", "verify meshless", "compare", "sweep", "rsr", "reproduce"}) {
     const RunResult r = run(std::string(sub) + " --help");
     EXPECT_EQ(r.exit_code, 0) << sub << "\n" << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;

@@ -18,7 +18,7 @@ TEST(CutOpening, MeshlessCrackOpensLikeTheFemCrack) {
   const std::vector<Eigen::Vector3d> profile = crack_opening_profile();
   std::map<meshless::CutTreatment, double> difference;
   for (meshless::CutTreatment treatment : {meshless::CutTreatment::enrichment, meshless::CutTreatment::visibility}) {
-    // 1.5 mm cloud, the case schema's default front transition (node spacing / 50).
+    // 1.5 mm cloud, the case schema's default front transition (0: the paper's function).
     const double spacing = 0.0015;
     int nodes = 0;
     const std::vector<double> efg =
