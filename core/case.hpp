@@ -81,11 +81,9 @@ struct MeshlessSpec {
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
   /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default, 0, is the
-  /// paper's function as it stands: the shape functions jump across the front line itself (a set no Gauss point
-  /// meets). l > 0 makes them continuous there, at a cost (docs/MESHLESS.md §5.2): l comparable to the Gauss-point
-  /// spacing stiffens the crack, and l far below it puts gradients of 1/l at the few points inside the transition,
-  /// which took the nonlinear law out of its admissible range on the cracked lung (configs/ci/lung_large_ci.json,
-  /// l = spacing / 50: Newton diverged in step 3; l = 0 converged).
+  /// paper's function as it stands: the crack opens closest to the FEM's, but the points beside the front carry
+  /// large strains, which on the cracked lung with k = 1 left the law's admissible range (configs/lung_large.json
+  /// sets l = spacing / 5). docs/MESHLESS.md §5.2 measures each choice.
   double front_transition = 0.012 * kFrontTransitionPerSpacing;
   static constexpr double kFrontTransitionPerSpacing = 0.0;
 };

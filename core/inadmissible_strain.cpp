@@ -20,7 +20,7 @@ std::string describe(const std::string& model, double time, const Eigen::Vector3
       "-1/(2k) = {:.4f}, so 1 + 2k lambda = {:.3g} <= 0 (strain xx, yy, zz, gamma_xy, gamma_yz, gamma_zx = "
       "{:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}, {:.4f}). There the material tangent is singular and no "
       "equilibrium "
-      "exists past it, so a smaller time step cannot help. To stay inside the range: lower the force "
+      "exists past it; a smaller time step does not change that. To stay inside the range: lower the force "
       "(/load/force), lower |k| (/material/k), or spread the force over a larger patch (/load/radius); a "
       "pointed "
       "or thin part of the surface under the probe concentrates the strain (docs/MATERIAL.md, admissible "

@@ -78,8 +78,10 @@ CutBackRecord advance_with_cutback(const std::string& model, double t_start, dou
     }
     record.failures.push_back(std::move(a));
     const double half = 0.5 * (t_next - t);
-    if (!(min_step > 0.0) || half < min_step * (1.0 - 1e-9) || !(half > 0.0))
+    if (!(min_step > 0.0) || half < min_step * (1.0 - 1e-9) || !(half > 0.0)) {
+      if (record.failures.back().inadmissible) throw InadmissibleStrain(*record.failures.back().inadmissible);
       throw StepCutBackFailed(model, t_start, t_end, min_step, record.failures);
+    }
     step = half;
     ++record.cutbacks;
   } while (t < t_end);

@@ -4,16 +4,24 @@
 // A model advances from t_n to t_{n+1} with Newton's method. When an attempt fails (too many iterations, a
 // diverging or non-finite residual, a failed linear solve), advance_with_cutback() halves the step and tries
 // again from t_n, down to a minimum step; sub-steps then run at that size until t_{n+1} is reached. When the
-// minimum step fails too it throws StepCutBackFailed with every attempt. A strain outside the law's
-// admissible range (core::InadmissibleStrain) is not a Newton failure: it propagates at once, because no step
-// size helps.
+// minimum step fails too it throws StepCutBackFailed with every attempt.
+//
+// The law's admissible range (core::InadmissibleStrain, docs/MATERIAL.md §1.5) is checked at every iterate, but
+// an iterate outside it is not an error by itself: Newton's transient iterates can overshoot where the
+// converged state does not. The models raise InadmissibleStrain when a *converged* state is outside the range
+// (no step size helps), and a failed attempt carries the first inadmissible iterate it met; when the cut-back
+// is exhausted and the last failure carries one, advance_with_cutback() throws it instead of
+// StepCutBackFailed, because that strain is why Newton failed.
 //
 // When the first attempt converges, advance_with_cutback() makes exactly one call, attempt(t_n, t_{n+1}), so
 // results at the requested times are those of plain stepping.
 #include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "core/inadmissible_strain.hpp"
 
 namespace core {
 
@@ -24,6 +32,8 @@ struct NewtonAttempt {
   int iterations = 0;             ///< linear solves
   std::vector<double> residuals;  ///< relative residual before each solve (and the converged one)
   std::string failure;            ///< why Newton stopped; empty when it converged
+  /// A failed attempt's first iterate outside the law's admissible range, if it met one (null otherwise).
+  std::shared_ptr<const InadmissibleStrain> inadmissible;
   bool converged() const { return failure.empty(); }
 };
 
@@ -67,6 +77,7 @@ class StepCutBackFailed : public std::runtime_error {
 /// min_step <= 0 disables the cut-back (the first failure throws). A step of zero length (an instantaneous
 /// load at t = 0) cannot be halved.
 /// @throws StepCutBackFailed when a sub-step shorter than 2 min_step fails
+/// @throws InadmissibleStrain instead, when that last failed attempt met an inadmissible iterate
 CutBackRecord advance_with_cutback(const std::string& model, double t_start, double t_end, double min_step,
                                    const std::function<NewtonAttempt(double t_from, double t_to)>& attempt);
 

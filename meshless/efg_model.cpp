@@ -328,14 +328,18 @@ void EfgModel::update_material(double dt) {
     stress_[q] = r.stress;
     tangent_[q] = r.tangent;
   });
-  // The law's admissible range (docs/MATERIAL.md §1.5), at every point of every iterate: past it the tangent is
-  // singular and no equilibrium exists, so stop with the point and the strain rather than let Newton wander.
+  // The law's admissible range (docs/MATERIAL.md §1.5), at every point of every iterate; newton_step() decides
+  // what a point past it means (core/step_cutback.hpp).
   weakest_point_ = -1;
   if (!check_margin || margins_.empty()) return;
   weakest_point_ = static_cast<int>(std::min_element(margins_.begin(), margins_.end()) - margins_.begin());
-  if (!(margins_[weakest_point_] > 0.0))
-    throw core::InadmissibleStrain(fmt::format("meshless (EFG) model '{}'", problem_.name), current_time_,
-                                   t.points.row(weakest_point_).transpose(), strain_[weakest_point_], law_);
+}
+
+std::shared_ptr<const core::InadmissibleStrain> EfgModel::inadmissible_iterate() const {
+  if (weakest_point_ < 0 || margins_[weakest_point_] > 0.0) return nullptr;
+  return std::make_shared<const core::InadmissibleStrain>(
+      fmt::format("meshless (EFG) model '{}'", problem_.name), current_time_,
+      volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_], law_);
 }
 
 void EfgModel::assemble_system(bool with_matrix) {
@@ -470,12 +474,13 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
     auto t0 = std::chrono::steady_clock::now();
     try {
       assemble_system(!reuse);
-    } catch (const core::InadmissibleStrain&) {
-      throw;  // no step size helps: stop the run
     } catch (const std::runtime_error& e) {
       attempt.failure = e.what();
       break;
     }
+    // A transient iterate past the admissible range is remembered, not fatal: if Newton fails, the first such
+    // iterate (the nearest to the range; later ones of a failing attempt drift far off) is why.
+    if (!attempt.inadmissible) attempt.inadmissible = inadmissible_iterate();
     if (reuse) rec->reused_factorisation = true;
     rec->assembly_seconds += seconds_since(t0);
     const double r = residual_.norm();
@@ -508,6 +513,12 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
     matrix_current_ = false;
     return attempt;
   }
+  // A converged state past the range is no equilibrium of the law: no step size helps, stop the run.
+  if (auto outside = inadmissible_iterate()) {
+    u_ = u_start;
+    throw core::InadmissibleStrain(*outside);
+  }
+  attempt.inadmissible = nullptr;
   rec->residuals = attempt.residuals;
   if (weakest_point_ >= 0) {
     const double m = margins_[weakest_point_];

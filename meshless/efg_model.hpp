@@ -106,7 +106,8 @@ class EfgModel {
   void solve();
   /// Advance one step (1-based index into problem().step_times): Newton to convergence, then commit history.
   /// When Newton fails the step is halved and retried down to problem().min_step (core/step_cutback.hpp).
-  /// @throws core::InadmissibleStrain when a strain leaves the law's admissible range (at any iteration)
+  /// @throws core::InadmissibleStrain when a converged state leaves the law's admissible range, or when the
+  ///         smallest step fails after meeting an iterate outside it (core/step_cutback.hpp)
   /// @throws core::StepCutBackFailed when even the smallest step fails, with every attempt
   StepRecord solve_step(int step);
   /// Start again from the undeformed body (U = 0, fresh Kelvin history, no step records) under a new traction,
@@ -158,6 +159,8 @@ class EfgModel {
 
  private:
   void update_material(double dt);
+  /// The last material update's weakest point as an error when it is outside the admissible range, else null.
+  std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate() const;
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
   /// restores the parameters U when it fails (the attempt callback of core::advance_with_cutback).
   core::NewtonAttempt newton_step(double t_from, double t_to, StepRecord* record);

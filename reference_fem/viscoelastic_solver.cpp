@@ -337,10 +337,8 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
   internal.compress(VectorOperation::add);
   external_force_norm_ = external.l2_norm();
   internal_force_norm_ = internal.l2_norm();
+  // The same on every process; newton_step() decides what a point past the admissible range means.
   iterate_margin_ = smallest_over_processes(iterate_margin_, mpi_communicator_);
-  // Past the law's admissible range the tangent is singular and no equilibrium exists: stop, naming the point.
-  if (!(iterate_margin_.margin > 0.0))
-    throw core::InadmissibleStrain("FEM reference", t_new, iterate_margin_.point, iterate_margin_.strain, law_);
   return system_rhs_.l2_norm();
 }
 
@@ -461,6 +459,9 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
     // under a held load) is measured against the forces in the body, not against round-off.
     if (iteration == 0) reference = std::max({norm, external_force_norm_, internal_force_norm_});
     const double relative = reference > 0.0 ? norm / reference : 0.0;
+    // A transient iterate past the admissible range is remembered, not fatal: if Newton fails, the first such
+    // iterate (the nearest to the range; later ones of a failing attempt drift far off) is why.
+    if (!attempt.inadmissible) attempt.inadmissible = inadmissible_iterate(t_new);
     attempt.residuals.push_back(std::isfinite(norm) ? relative : norm);
     attempt.failure = diverging(attempt.residuals);
     if (!attempt.converged()) break;
@@ -497,12 +498,25 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
     rebuild_ = true;  // the preconditioner belongs to a failed iterate
     return attempt;
   }
+  // A converged state past the range is no equilibrium of the law: no step size helps, stop the run.
+  if (auto outside = inadmissible_iterate(t_new)) {
+    solution_ = committed;
+    ghosted_solution_ = solution_;
+    throw core::InadmissibleStrain(*outside);
+  }
+  attempt.inadmissible = nullptr;
   report->residuals = attempt.residuals;
   report->admissibility_margin = std::min(report->admissibility_margin, iterate_margin_.margin);
   smallest_margin_.update(iterate_margin_.margin, t_new, iterate_margin_.point, iterate_margin_.strain);
   update_history(dt);
   time_ = t_new;
   return attempt;
+}
+
+std::shared_ptr<const core::InadmissibleStrain> ViscoelasticSolver::inadmissible_iterate(double t_new) const {
+  if (iterate_margin_.margin > 0.0) return nullptr;
+  return std::make_shared<const core::InadmissibleStrain>("FEM reference", t_new, iterate_margin_.point,
+                                                          iterate_margin_.strain, law_);
 }
 
 void ViscoelasticSolver::assemble_newton_system(double t_new) {

@@ -56,7 +56,8 @@ class ViscoelasticSolver {
 
   /// Advance from the current time to t_new with Newton's method; commits the history on convergence. When
   /// Newton fails, the step is halved and retried down to parameters.newton.min_step (core/step_cutback.hpp).
-  /// @throws core::InadmissibleStrain when a strain leaves the law's admissible range (at any iteration)
+  /// @throws core::InadmissibleStrain when a converged state leaves the law's admissible range, or when the
+  ///         smallest step fails after meeting an iterate outside it (core/step_cutback.hpp)
   /// @throws core::StepCutBackFailed when even the smallest step fails, with every attempt
   StepReport do_time_step(double t_new);
 
@@ -115,6 +116,8 @@ class ViscoelasticSolver {
   /// One Newton solve from the committed state to t_new: commits on convergence, restores the solution when
   /// it fails (the attempt of core::advance_with_cutback).
   core::NewtonAttempt newton_step(double t_new, StepReport* report);
+  /// The last assembly's smallest margin as an error when it is outside the admissible range, else null.
+  std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate(double t_new) const;
   void update_history(double dt);
   void local_assemble(const typename dealii::DoFHandler<3>::active_cell_iterator& cell, ScratchData& scratch,
                       CopyData& copy) const;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <iostream>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -94,6 +95,48 @@ TEST(StepCutback, DisabledOrZeroLengthStepFailsAtOnce) {
   instant.largest = -1.0;  // even a zero-length step fails
   EXPECT_THROW(advance_with_cutback("model", 0.0, 0.0, 0.01, std::ref(instant)), StepCutBackFailed);
   EXPECT_EQ(instant.calls.size(), 1u);
+}
+
+// An attempt that fails after an iterate outside the law's admissible range is cut back like any failure; when
+// the minimum step fails with such an iterate, the run stops with that InadmissibleStrain (its point and strain),
+// not with the list of attempts. An inadmissible iterate in an attempt that converges is no error.
+TEST(StepCutback, InadmissibleIterateIsCutBackThenReportedAtTheMinimumStep) {
+  const KelvinLaw law(KelvinParameters{2000.0, 1000.0, 600.0, 0.3, 1.0});
+  Vector6 strain = Vector6::Zero();
+  strain[2] = -0.6;  // 1 + 2k lambda = -0.2
+  const auto outside = std::make_shared<const InadmissibleStrain>("FEM reference", 0.1, Eigen::Vector3d(0.01, 0.02, 0.03),
+                                                                  strain, law);
+  int calls = 0;
+  const auto failing = [&](double from, double to) {
+    ++calls;
+    NewtonAttempt a;
+    a.t_start = from;
+    a.t_end = to;
+    a.failure = "diverging";
+    if (calls == 2) a.inadmissible = outside;  // only the second of three attempts met it
+    return a;
+  };
+  EXPECT_THROW(advance_with_cutback("FEM reference", 0.0, 0.2, 0.04, failing), StepCutBackFailed)
+      << "the last attempt met no inadmissible iterate";
+  calls = 1;  // the next call is the second: it meets the inadmissible iterate
+  try {
+    advance_with_cutback("FEM reference", 0.0, 0.2, 0.2, failing);
+    FAIL() << "expected InadmissibleStrain";
+  } catch (const InadmissibleStrain& e) {
+    EXPECT_EQ(calls, 2) << "only the whole step was tried: 0.1 is below the minimum";
+    EXPECT_DOUBLE_EQ(e.margin(), outside->margin());
+    EXPECT_EQ(e.point(), outside->point());
+    EXPECT_NEAR(e.margin(), -0.2, 1e-12);
+  }
+  const auto converging = [&](double from, double to) {
+    NewtonAttempt a;
+    a.t_start = from;
+    a.t_end = to;
+    a.inadmissible = outside;  // a transient iterate; the model clears it on convergence, but it must not matter
+    a.failure.clear();
+    return a;
+  };
+  EXPECT_EQ(advance_with_cutback("FEM reference", 0.0, 0.2, 0.04, converging).substeps, 1);
 }
 
 TEST(DivergenceTest, StopsOnNonFiniteGrowthAndRepeatedIncrease) {
