@@ -13,6 +13,7 @@ PACKAGES=(
   openmpi-bin libopenmpi-dev  # mpirun for the distributed FEM reference and its MPI test (deal.II is built on OpenMPI)
   libpetsc-real-dev      # PETSc with hypre and Trilinos ML: the EFG model's AMG-Krylov solve (also a deal.II dependency)
   python3 python3-matplotlib
+  clang libclang-rt-14-dev    # libFuzzer: the short fuzzing run of the case and STL readers (build_and_test.sh)
 )
 
 missing=()
