@@ -479,7 +479,7 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
       break;
     }
     // A transient iterate past the admissible range is remembered, not fatal: if Newton fails, the first such
-    // iterate (the nearest to the range; later ones of a failing attempt drift far off) is why.
+    // iterate is reported (later iterates of a failing attempt drifted further off on the lung-tip case).
     if (!attempt.inadmissible) attempt.inadmissible = inadmissible_iterate();
     if (reuse) rec->reused_factorisation = true;
     rec->assembly_seconds += seconds_since(t0);

@@ -460,7 +460,7 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
     if (iteration == 0) reference = std::max({norm, external_force_norm_, internal_force_norm_});
     const double relative = reference > 0.0 ? norm / reference : 0.0;
     // A transient iterate past the admissible range is remembered, not fatal: if Newton fails, the first such
-    // iterate (the nearest to the range; later ones of a failing attempt drift far off) is why.
+    // iterate is reported (later iterates of a failing attempt drifted further off on the lung-tip case).
     if (!attempt.inadmissible) attempt.inadmissible = inadmissible_iterate(t_new);
     attempt.residuals.push_back(std::isfinite(norm) ? relative : norm);
     attempt.failure = diverging(attempt.residuals);
