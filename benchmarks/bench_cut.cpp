@@ -53,6 +53,9 @@ void BM_CutLocalUpdate(benchmark::State& state) {
     state.counters["recomputed_fraction"] =
         static_cast<double>(update.volume_points_recomputed) / update.volume_points;
     state.counters["shape_s"] = update.shape_function_seconds;
+    state.counters["quadrature_s"] = update.quadrature_seconds;
+    state.counters["coupling_s"] = update.coupling_seconds;
+    state.counters["pairs_added"] = static_cast<double>(update.pairs_added);
     state.PauseTiming();
     model.reset();
     state.ResumeTiming();

@@ -97,7 +97,10 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                              {"boundary_points_recomputed", u.boundary_points_recomputed},
                              {"boundary_points", u.boundary_points},
                              {"modified_nodes", u.modified_nodes},
+                             {"pairs_added", u.pairs_added},
+                             {"quadrature_seconds", u.quadrature_seconds},
                              {"shape_function_seconds", u.shape_function_seconds},
+                             {"coupling_seconds", u.coupling_seconds},
                              {"seconds", u.seconds}});
       if (on_step)
         on_step(fmt::format("cut advanced to {:.1f} of {:.1f} mm: shape functions of {} of {} volume points "

@@ -121,12 +121,12 @@ void EfgModel::setup_system() {
   states_.assign(nq, core::KelvinState{});
   const int n = mesh.num_vertices();
   u_ = Eigen::VectorXd::Zero(3 * n);
-  build_couplings();  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
+  build_couplings(true);  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
   timings_.setup_seconds += seconds_since(t0);
   set_up_ = true;
 }
 
-void EfgModel::build_couplings() {
+void EfgModel::build_couplings(bool new_pattern) {
   const core::TetMesh& mesh = problem_.mesh;
   const int n = mesh.num_vertices();
   volume_incidence_ = NodeIncidence(volume_, n);
@@ -138,19 +138,24 @@ void EfgModel::build_couplings() {
           "{:.6g} mm); refine the background cells or raise support_factor",
           problem_.name, i, 1e3 * mesh.vertices(i, 0), 1e3 * mesh.vertices(i, 1), 1e3 * mesh.vertices(i, 2),
           1e3 * radii_->radius(i)));
-  sparsity_ = std::make_unique<NodalSparsity>(n, std::vector<const ShapeTable*>{&volume_, &surface_},
-                                              std::vector<const NodeIncidence*>{&volume_incidence_, &surface_incidence_});
-  matrix_ = sparsity_->make_matrix();
   matrix_current_ = false;
-  // A new pattern (set-up, or a cut that advanced): choose and analyse the solver for it again.
-  // The automatic choice runs an AMD ordering of the node pairs: part of the set-up cost.
-  const auto t_choice = std::chrono::steady_clock::now();
-  linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, mesh.vertices, problem_.name);
-  timings_.setup_seconds += seconds_since(t_choice);
-  stats_.linear_solver = linear_solver_->description();
-  stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
-  stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
-  stats_.available_memory = linear_solver_->available_memory_bytes();
+  if (!new_pattern) {
+    linear_solver_->invalidate();  // the same method; the values change, so the next solve prepares it again
+  } else {
+    sparsity_ = std::make_unique<NodalSparsity>(
+        n, std::vector<const ShapeTable*>{&volume_, &surface_},
+        std::vector<const NodeIncidence*>{&volume_incidence_, &surface_incidence_});
+    matrix_ = sparsity_->make_matrix();
+    // A new pattern (set-up, or a cut that advanced into new node pairs): choose and analyse the solver for it
+    // again. The automatic choice runs an AMD ordering of the node pairs: part of the set-up cost.
+    const auto t_choice = std::chrono::steady_clock::now();
+    linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, mesh.vertices, problem_.name);
+    timings_.setup_seconds += seconds_since(t_choice);
+    stats_.linear_solver = linear_solver_->description();
+    stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
+    stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
+    stats_.available_memory = linear_solver_->available_memory_bytes();
+  }
   boundary_ = make_boundary_terms(problem_, surface_, alpha_);
 
   // Linear variationally consistent integration: xi_i = (oint phi_i n - int grad phi_i) / int_{supp i} 1, both
@@ -171,7 +176,6 @@ void EfgModel::build_couplings() {
   vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
   if (options_.variationally_consistent)
     for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect.col(i) / support_volume[i];
-
   const int nq = volume_.size();
   strain_.assign(nq, core::Vector6::Zero());
   stress_.assign(nq, core::Vector6::Zero());
@@ -216,9 +220,73 @@ std::vector<int> match_points(const ShapeTable& before, const QuadraturePoints& 
 
 }  // namespace
 
+/// What decides, under the enrichment, whether a point's weights change between two cuts. h_i(X) =
+/// (1 + sigma_i Phi(X)) / 2 for a node the cut modifies and 1 otherwise (eq. 32): node i enters only through
+/// whether it is modified and its side sigma_i, and the point only through Phi. So a point changes when a node
+/// whose (modified, sigma_i) changed covers it, or when Phi (or its gradient) changed and a node modified by either
+/// cut covers it. Both node sets are small next to the cloud, so a search over each alone is cheap.
+class NodesWithNewEnrichment {
+ public:
+  NodesWithNewEnrichment(const CutWeights& before, const CutWeights& after, const core::PointMatrix& nodes,
+                         const SupportRadii& radii) {
+    std::vector<int> changed, modified;
+    for (int i = 0; i < nodes.rows(); ++i) {
+      if (before.modifies(i) || after.modifies(i)) modified.push_back(i);
+      if (before.modifies(i) != after.modifies(i) || (after.modifies(i) && before.node_side(i) != after.node_side(i)))
+        changed.push_back(i);
+    }
+    changed_ = std::make_unique<Subset>(changed, nodes, radii);
+    modified_ = std::make_unique<Subset>(modified, nodes, radii);
+  }
+  /// True when a node whose enrichment data changed covers x.
+  bool changed_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+    return changed_->covers(x, hits);
+  }
+  /// True when a node modified by either cut covers x.
+  bool modified_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+    return modified_->covers(x, hits);
+  }
+
+ private:
+  /// Some of the nodes, with their radii and a KD-tree over them (which references `positions`).
+  struct Subset {
+    core::PointMatrix positions;
+    Eigen::VectorXd radii;
+    double max_radius = 0.0;
+    std::unique_ptr<NodeSearch> search;
+    Subset(const std::vector<int>& ids, const core::PointMatrix& nodes, const SupportRadii& all)
+        : positions(static_cast<Eigen::Index>(ids.size()), 3), radii(static_cast<Eigen::Index>(ids.size())) {
+      for (std::size_t k = 0; k < ids.size(); ++k) {
+        positions.row(k) = nodes.row(ids[k]);
+        radii[k] = all.radius(ids[k]);
+      }
+      if (ids.empty()) return;
+      max_radius = radii.maxCoeff();
+      search = std::make_unique<NodeSearch>(positions);
+    }
+    bool covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+      if (!search) return false;
+      search->covering(x, radii, max_radius, hits);
+      return !hits->empty();
+    }
+  };
+  std::unique_ptr<Subset> changed_, modified_;
+};
+
 bool EfgModel::weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
-                               std::vector<NodeHit>* hits) const {
+                               std::vector<NodeHit>* hits, const NodesWithNewEnrichment* enrichment) const {
   constexpr double kTolerance = 1e-13;  // round-off of h and of rho * grad h
+  if (enrichment) {
+    // h_i = (1 + sigma_i Phi) / 2: the weights of unchanged nodes move with Phi alone (and their gradients with
+    // grad Phi / 2, compared at the largest radius, as below).
+    const CutWeights& after = *cut_weights_;
+    Eigen::Vector3d g0, g1;
+    const double phi0 = before->enrichment_function(x, side, gradients ? &g0 : nullptr);
+    const double phi1 = after.enrichment_function(x, side, gradients ? &g1 : nullptr);
+    if (0.5 * std::abs(phi1 - phi0) > kTolerance || (gradients && 0.5 * radii_->max_radius() * (g1 - g0).norm() > kTolerance))
+      return enrichment->modified_node_covers(x, hits);
+    return enrichment->changed_node_covers(x, hits);
+  }
   search_->covering(x, radii_->radii(), radii_->max_radius(), hits);
   const CutWeights* after = cut_weights_.get();
   Eigen::Vector3d g0 = Eigen::Vector3d::Zero(), g1 = Eigen::Vector3d::Zero();
@@ -249,6 +317,10 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   // change only if its support meets the cut (old or new), so points farther than 2 rho_max from both cuts are
   // reused without looking.
   const double reach = 2.0 * radii_->max_radius();
+  std::unique_ptr<NodesWithNewEnrichment> enrichment;
+  if (before && before->treatment() == CutTreatment::enrichment && cut_weights_->treatment() == CutTreatment::enrichment &&
+      before->front_transition() == cut_weights_->front_transition())
+    enrichment = std::make_unique<NodesWithNewEnrichment>(*before, *cut_weights_, problem_.mesh.vertices, *radii_);
   auto reuse_of = [&](const std::vector<int>& same, const QuadraturePoints& points, bool gradients, int* recomputed) {
     std::vector<int> reuse = same;
     std::vector<char> changed(points.size(), 0);
@@ -257,7 +329,8 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
       if (reuse[q] < 0) return;
       const Eigen::Vector3d x = points.points.row(q).transpose();
       const bool near = cut.frame(x).distance < reach || (previous_cut && previous_cut->frame(x).distance < reach);
-      if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits)) changed[q] = 1;
+      if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits, enrichment.get()))
+        changed[q] = 1;
     });
     for (int q = 0; q < points.size(); ++q) {
       if (changed[q]) reuse[q] = -1;
@@ -292,12 +365,26 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
     }
   }
 
+  report.quadrature_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
   volume_ = tabulate_shape_functions(*mls_, std::move(vq), true, volume_, volume_reuse);
   surface_ = tabulate_shape_functions(*mls_, std::move(sq), false, surface_, surface_reuse);
   report.shape_function_seconds = seconds_since(t1);
   states_ = std::move(states);
-  build_couplings();
+
+  // A reused row keeps its nodes, whose pairs the pattern holds; only the recomputed rows can bring a new pair.
+  const auto t2 = std::chrono::steady_clock::now();
+  auto recomputed_rows = [](const std::vector<int>& reuse) {
+    std::vector<int> rows;
+    for (int q = 0; q < static_cast<int>(reuse.size()); ++q)
+      if (reuse[q] < 0) rows.push_back(q);
+    return rows;
+  };
+  report.pairs_added = sparsity_->add_pairs(volume_, recomputed_rows(volume_reuse)) +
+                       sparsity_->add_pairs(surface_, recomputed_rows(surface_reuse));
+  if (report.pairs_added > 0) matrix_ = sparsity_->make_matrix();  // the pattern grew: new storage
+  build_couplings(false);
+  report.coupling_seconds = seconds_since(t2);
   report.seconds = seconds_since(t0);
   report.modified_nodes = cut_weights_->num_modified();
   return report;

@@ -25,6 +25,7 @@ class SupportRadii;
 class MlsShapeFunctions;
 class CutWeights;
 struct NodeHit;
+class NodesWithNewEnrichment;
 class EfgLinearSolver;
 
 /// What happened in one time step.
@@ -58,7 +59,10 @@ struct CutUpdate {
   int volume_points_recomputed = 0;            ///< shape functions evaluated again (new or changed weights)
   int boundary_points_recomputed = 0;
   int modified_nodes = 0;                      ///< nodes whose weights the new cut modifies
+  long long pairs_added = 0;  ///< node-pair blocks added to the kept sparsity pattern (0: the matrix storage stays)
+  double quadrature_seconds = 0.0;             ///< rebuilding the points, matching them, the reuse test, history
   double shape_function_seconds = 0.0;         ///< the MLS evaluations
+  double coupling_seconds = 0.0;               ///< incidence, new node pairs, boundary terms, VCI
   double seconds = 0.0;                        ///< the whole update (quadrature, MLS, couplings, VCI)
 };
 
@@ -121,7 +125,11 @@ class EfgModel {
   /// history. A local update (paper §4): the quadrature is rebuilt (cheap geometry), but only the points that are
   /// new or whose covering nodes change weight get their shape functions evaluated again; the others keep their
   /// rows. Points of a cell that is split differently take the history of the nearest old point of that cell.
-  /// The next solve refactorises. Gives the same tables as a set-up with `cut` from the start, to round-off.
+  /// The sparsity pattern and the linear solver's choice are kept: a longer cut mostly removes couplings, and
+  /// the few node pairs that only the new points couple are added (NodalSparsity::add_pairs). The matrix may
+  /// therefore hold pairs the cut has since uncoupled, assembled as zeros. The next solve prepares the solver
+  /// again. Gives the same tables, and the same stiffness values, as a set-up with `cut` from the start, to
+  /// round-off.
   CutUpdate advance_cut(const core::RuledSurface& cut);
 
   // --- results ---------------------------------------------------------------------------------------------
@@ -169,10 +177,14 @@ class EfgModel {
   /// Volume points, and boundary points (outer faces and the lips of the cut), for the current problem.
   void build_quadrature(QuadraturePoints* volume, QuadraturePoints* surface) const;
   /// Everything that follows from the tabulated points: incidence, sparsity, boundary terms, VCI, statistics.
-  void build_couplings();
+  /// Without new_pattern the sparsity pattern, the matrix storage and the linear solver's choice stay as they
+  /// are: the caller made sure the pattern holds every node pair of the tables (advance_cut).
+  void build_couplings(bool new_pattern);
   /// True when a node covering x has a different weight (or gradient) under `before` than under the current cut.
+  /// With `enrichment` (both cuts enriched alike) the test compares Phi and looks only at the nodes whose
+  /// enrichment data changed; otherwise it evaluates every covering node.
   bool weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
-                       std::vector<NodeHit>* hits) const;
+                       std::vector<NodeHit>* hits, const NodesWithNewEnrichment* enrichment) const;
 
   EfgProblem problem_;
   EfgOptions options_;

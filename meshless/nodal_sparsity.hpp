@@ -26,6 +26,13 @@ class NodalSparsity {
   int column(int k) const { return columns_[k]; }
   long long num_block_entries() const { return static_cast<long long>(columns_.size()); }
 
+  /// Add to this pattern every node pair that shares one of `points` (rows of `table`) and is not in it yet;
+  /// returns how many block entries were added (both (i, j) and (j, i) count). A cut that advances mostly
+  /// removes couplings, so the local update keeps the pattern of the shorter cut and adds the few pairs that
+  /// only the new points couple (a cell split differently, a new lip point); the pairs in excess are assembled
+  /// as zeros.
+  long long add_pairs(const ShapeTable& table, const std::vector<int>& points);
+
   /// A 3N by 3N row-major matrix with this pattern and zero values.
   SparseMatrix make_matrix() const;
   /// The N by N node-pair pattern as a compressed column-major matrix with 64-bit indices (values zero):
