@@ -19,6 +19,14 @@ if(TISSUE_SANITIZE OR TISSUE_FUZZ)
   set(tissue_sanitizers -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer)
   add_compile_options(${tissue_sanitizers} -g)
   add_link_options(-fsanitize=address,undefined)
+  # Eigen switches to its own offset ("handmade") aligned malloc when __SANITIZE_ADDRESS__ is defined, while
+  # Debian's libgmsh uses Eigen with plain malloc/free. Template instances such as
+  # ColPivHouseholderQR<MatrixXd>'s constructor are weak symbols, so the dynamic linker binds libgmsh's calls
+  # to our sanitized copy: fullMatrix<double>::luSolve (Gmsh's 2-D frontal mesher) then allocated through
+  # our copy and freed with its own inlined std::free, 16 bytes inside the block, and ASan aborted with
+  # "bad-free". Keeping Eigen's allocation the same as libgmsh's removes that clash; ASan's malloc returns
+  # 16-byte aligned blocks on x86-64, which Eigen asserts.
+  add_compile_definitions(EIGEN_MALLOC_ALREADY_ALIGNED=1)
 endif()
 if(TISSUE_FUZZ)
   # Coverage instrumentation for libFuzzer in every library; the fuzz targets link the fuzzer's main().
