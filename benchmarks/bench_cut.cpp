@@ -2,13 +2,23 @@
 // local update that advances its cut by one increment (EfgModel::advance_cut), on the sheared-box clouds of
 // bench_efg (13^3, 20^3, 32^3 nodes, spacing 5 mm). The cut: two panels from the top face down a third of the box,
 // across its middle; the update advances it from 80 % to 100 % of its length (one of five increments).
-// Ratios within one run: full set-up / local update; how each grows with the node count.
+// Ratios within one run: full set-up / local update (the `speedup` counter of each local update, against a full
+// set-up with the same cut timed just before it); how each grows with the node count.
+//
+// BM_CutLungFullSetUp / BM_CutLungLocalUpdate: the same on configs/lung_large.json at its shipped resolution (the
+// built-in lung, its node cloud and its front transition) for a 10 mm extension of the incision: a full set-up with
+// the whole cut against the local update from the cut 10 mm shorter. The geometry (Gmsh) is built once, untimed.
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <memory>
+#include <string>
 
 #include "benchmarks/mpi_benchmark_main.hpp"
+#include "core/case.hpp"
+#include "core/geometry.hpp"
 #include "meshless/efg_model.hpp"
+#include "meshless/efg_problem.hpp"
 #include "meshless/verification_problems.hpp"
 
 namespace {
@@ -26,6 +36,27 @@ meshless::EfgProblem cut_problem(int side, const core::RuledSurface& cut) {
   p.cut_treatment = meshless::CutTreatment::enrichment;
   p.front_transition = 0.02 * p.node_spacing;
   return p;
+}
+
+/// Wall time of a full set-up of `problem` [s]: measured beside each local update (with the timer paused), so
+/// that the `speedup` counter is a ratio within one run.
+double full_setup_seconds(meshless::EfgProblem problem) {
+  const auto t0 = std::chrono::steady_clock::now();
+  meshless::EfgModel model(std::move(problem));
+  model.setup_system();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// The local update's counters: its phases, and the speed-up over the full set-up measured just before it.
+void report_update(benchmark::State& state, const meshless::CutUpdate& update, double full_seconds) {
+  state.counters["recomputed_fraction"] = static_cast<double>(update.volume_points_recomputed) / update.volume_points;
+  state.counters["shape_s"] = update.shape_function_seconds;
+  state.counters["quadrature_s"] = update.quadrature_seconds;
+  state.counters["coupling_s"] = update.coupling_seconds;
+  state.counters["pairs_added"] = static_cast<double>(update.pairs_added);
+  state.counters["update_s"] = update.seconds;
+  state.counters["full_setup_s"] = full_seconds;
+  state.counters["speedup"] = full_seconds / update.seconds;
 }
 
 void BM_CutFullSetUp(benchmark::State& state) {
@@ -46,16 +77,12 @@ void BM_CutLocalUpdate(benchmark::State& state) {
   const core::RuledSurface earlier = cut.truncated(0.8 * cut.trace_length());
   for (auto _ : state) {
     state.PauseTiming();
+    const double full_seconds = full_setup_seconds(cut_problem(side, cut));
     auto model = std::make_unique<meshless::EfgModel>(cut_problem(side, earlier));
     model->setup_system();
     state.ResumeTiming();
     const meshless::CutUpdate update = model->advance_cut(cut);
-    state.counters["recomputed_fraction"] =
-        static_cast<double>(update.volume_points_recomputed) / update.volume_points;
-    state.counters["shape_s"] = update.shape_function_seconds;
-    state.counters["quadrature_s"] = update.quadrature_seconds;
-    state.counters["coupling_s"] = update.coupling_seconds;
-    state.counters["pairs_added"] = static_cast<double>(update.pairs_added);
+    report_update(state, update, full_seconds);
     state.PauseTiming();
     model.reset();
     state.ResumeTiming();
@@ -63,10 +90,55 @@ void BM_CutLocalUpdate(benchmark::State& state) {
   state.counters["nodes"] = side * side * side;
 }
 
+/// configs/lung_large.json as the EFG model's problem, with the whole cut (Gmsh once per process).
+const meshless::EfgProblem& lung_large_problem() {
+  static const meshless::EfgProblem problem = [] {
+    const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_large.json");
+    core::GeometryOptions options;
+    options.build_fem_mesh = false;
+    return meshless::problem_from_case(c, core::build_geometry(c, options));
+  }();
+  return problem;
+}
+
+constexpr double kLungExtension = 0.010;  // [m] the issue's 10 mm advance of the incision
+
+void BM_CutLungFullSetUp(benchmark::State& state) {
+  lung_large_problem();  // Gmsh, outside the timed loop
+  for (auto _ : state) {
+    meshless::EfgModel model(lung_large_problem());
+    model.setup_system();
+    state.counters["shape_s"] = model.timings().shape_function_seconds;
+    state.counters["nodes"] = model.statistics().num_nodes;
+    state.counters["volume_points"] = model.statistics().num_volume_points;
+  }
+}
+
+void BM_CutLungLocalUpdate(benchmark::State& state) {
+  const core::RuledSurface cut = *lung_large_problem().cut;
+  for (auto _ : state) {
+    state.PauseTiming();
+    const double full_seconds = full_setup_seconds(lung_large_problem());
+    meshless::EfgProblem shorter = lung_large_problem();
+    shorter.cut = cut.truncated(cut.trace_length() - kLungExtension);
+    auto model = std::make_unique<meshless::EfgModel>(std::move(shorter));
+    model->setup_system();
+    state.ResumeTiming();
+    const meshless::CutUpdate update = model->advance_cut(cut);
+    report_update(state, update, full_seconds);
+    state.counters["cut_length_mm"] = 1e3 * cut.trace_length();
+    state.PauseTiming();
+    model.reset();
+    state.ResumeTiming();
+  }
+}
+
 }  // namespace
 
 BENCHMARK(BM_CutFullSetUp)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
 BENCHMARK(BM_CutLocalUpdate)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_CutLungFullSetUp)->Unit(benchmark::kMillisecond)->Iterations(1);
+BENCHMARK(BM_CutLungLocalUpdate)->Unit(benchmark::kMillisecond)->Iterations(1);
 
 int main(int argc, char** argv) {
   // A cloud too large to factorise gets the AMG-Krylov solver at set-up.

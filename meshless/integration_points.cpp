@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <exception>
 #include <utility>
 
@@ -167,13 +168,11 @@ ShapeTable tabulate(const MlsShapeFunctions& mls, QuadraturePoints points, bool 
   t.dphi.resize(3, with_gradients ? total : 0);
 #pragma omp parallel for schedule(static)
   for (int q = 0; q < nq; ++q) {
-    if (reuse && (*reuse)[q] >= 0) {
-      const int from = previous->begin((*reuse)[q]);
-      for (int k = 0; k < row_size(q); ++k) {
-        t.nodes[t.offsets[q] + k] = previous->nodes[from + k];
-        t.phi[t.offsets[q] + k] = previous->phi[from + k];
-        if (with_gradients) t.dphi.col(t.offsets[q] + k) = previous->dphi.col(from + k);
-      }
+    if (reuse && (*reuse)[q] >= 0) {  // whole rows: most of a local update's table is copied
+      const int from = previous->begin((*reuse)[q]), to = t.offsets[q], len = row_size(q);
+      std::copy_n(previous->nodes.begin() + from, len, t.nodes.begin() + to);
+      std::copy_n(previous->phi.begin() + from, len, t.phi.begin() + to);
+      if (with_gradients) t.dphi.middleCols(to, len) = previous->dphi.middleCols(from, len);
       continue;
     }
     const MlsEvaluation& e = evals[q];

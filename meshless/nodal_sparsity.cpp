@@ -97,12 +97,21 @@ long long NodalSparsity::add_pairs(const ShapeTable& table, const std::vector<in
   return static_cast<long long>(missing.size());
 }
 
-SparseMatrix NodalSparsity::make_matrix() const {
+SparseMatrix NodalSparsity::make_matrix(double spare_fraction) const {
+  const long long nnz = 9LL * static_cast<long long>(columns_.size());
+  SparseMatrix m(3 * num_nodes(), 3 * num_nodes());
+  m.data().reserve(static_cast<Eigen::Index>(std::min(2147483647.0, (1.0 + spare_fraction) * static_cast<double>(nnz))));
+  refill_matrix(&m);
+  return m;
+}
+
+void NodalSparsity::refill_matrix(SparseMatrix* matrix) const {
   const int n = num_nodes();
   const long long nnz = 9LL * static_cast<long long>(columns_.size());
   if (nnz > 2147483647LL) throw std::length_error("NodalSparsity: more than 2^31 non-zeros");
-  SparseMatrix m(3 * n, 3 * n);
-  m.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  SparseMatrix& m = *matrix;
+  m.resize(3 * n, 3 * n);  // keeps the value and index arrays, empty
+  m.resizeNonZeros(static_cast<Eigen::Index>(nnz));  // reallocates only when they are too small
   int* outer = m.outerIndexPtr();
   int* inner = m.innerIndexPtr();
   double* values = m.valuePtr();
@@ -118,7 +127,6 @@ SparseMatrix NodalSparsity::make_matrix() const {
     }
   }
   outer[3 * n] = static_cast<int>(nnz);
-  return m;
 }
 
 Eigen::SparseMatrix<double, Eigen::ColMajor, long> NodalSparsity::node_pattern() const {

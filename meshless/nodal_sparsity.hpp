@@ -33,8 +33,11 @@ class NodalSparsity {
   /// as zeros.
   long long add_pairs(const ShapeTable& table, const std::vector<int>& points);
 
-  /// A 3N by 3N row-major matrix with this pattern and zero values.
-  SparseMatrix make_matrix() const;
+  /// A 3N by 3N row-major matrix with this pattern and zero values, with its value and index arrays allocated
+  /// for spare_fraction more entries (room for add_pairs(), filled by refill_matrix() without a new allocation).
+  SparseMatrix make_matrix(double spare_fraction = 0.0) const;
+  /// Give `m` this pattern and zero values, in its own arrays when they have room (else they are reallocated).
+  void refill_matrix(SparseMatrix* m) const;
   /// The N by N node-pair pattern as a compressed column-major matrix with 64-bit indices (values zero):
   /// what an ordering analyses instead of the 9x larger DOF pattern. The pattern is symmetric, so the CSR
   /// arrays serve as CSC arrays.

@@ -315,8 +315,8 @@ TEST(EfgCut, LocalUpdateGivesTheStiffnessOfAFullSetUp) {
     // below covers them too.
     EXPECT_GT(b.nonZeros(), a.nonZeros());
     EXPECT_LT(update.pairs_added, 0.001 * a.nonZeros() / 9) << "a cut that advances mostly removes couplings";
-    std::cout << "  the kept pattern gained " << update.pairs_added << " node pairs and holds " << b.nonZeros() - a.nonZeros()
-              << " entries more than the full set-up's\n";
+    std::cout << "  the kept pattern gained " << update.pairs_added << " node pairs (the full set-up's has "
+              << a.nonZeros() / 9 << ") and holds " << b.nonZeros() - a.nonZeros() << " entries more than it\n";
     const SparseMatrix difference = a - b;
     const double diff = difference.coeffs().cwiseAbs().maxCoeff();
     const double scale = a.coeffs().cwiseAbs().maxCoeff();
@@ -357,6 +357,9 @@ TEST(NodalSparsity, AddPairsMergesTheMissingPairsIntoSortedRows) {
   ASSERT_EQ(pattern.num_block_entries(), 9 + 4 - 1);  // {0,1,2}^2 and {2,3}^2 share (2,2)
 
   // Point 1 of the new table is already coupled; point 0 couples 1-3, 1-4, 3-4 and node 4 with itself.
+  SparseMatrix m = pattern.make_matrix(1.0);  // room for as many entries again
+  const double* storage = m.valuePtr();
+
   const ShapeTable after = node_lists({{3, 1, 4}, {0, 2}});
   EXPECT_EQ(pattern.add_pairs(after, {1}), 0);
   EXPECT_EQ(pattern.add_pairs(after, {0, 1}), 7);
@@ -366,8 +369,11 @@ TEST(NodalSparsity, AddPairsMergesTheMissingPairsIntoSortedRows) {
   EXPECT_EQ(row_of(pattern, 3), (std::vector<int>{1, 2, 3, 4}));
   EXPECT_EQ(row_of(pattern, 4), (std::vector<int>{1, 3, 4}));
   EXPECT_EQ(pattern.add_pairs(after, {0, 1}), 0) << "a second call finds nothing left to add";
-  const SparseMatrix m = pattern.make_matrix();
+  pattern.refill_matrix(&m);
   EXPECT_EQ(m.nonZeros(), 9 * 19);
+  EXPECT_EQ(m.valuePtr(), storage) << "the spare room took the new pairs";
+  EXPECT_EQ(m.coeff(3 * 4 + 2, 3 * 1 + 0), 0.0);
+  EXPECT_EQ(m.innerVector(3 * 4).nonZeros(), 9) << "row 4 couples nodes 1, 3 and 4";
 }
 
 TEST(EfgCut, CutCellsAreSplitAndFilledExactly) {
