@@ -391,7 +391,14 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   };
   report.pairs_added = sparsity_->add_pairs(volume_, recomputed_rows(volume_reuse)) +
                        sparsity_->add_pairs(surface_, recomputed_rows(surface_reuse));
-  if (report.pairs_added > 0) sparsity_->refill_matrix(&matrix_);  // in the spare room kept at set-up
+  if (report.pairs_added > 0) {
+    sparsity_->refill_matrix(&matrix_);  // in the spare room kept at set-up
+    // A solver's symbolic analysis (UMFPACK's ordering) belongs to the old pattern: start a solver of the method
+    // chosen at set-up afresh. Without new pairs the kept solver reuses its analysis.
+    EfgOptions chosen = options_;
+    chosen.linear_solver = linear_solver_->kind();
+    linear_solver_ = std::make_unique<EfgLinearSolver>(chosen, *sparsity_, problem_.mesh.vertices, problem_.name);
+  }
   build_couplings(false);
   report.coupling_seconds = seconds_since(t2);
   report.seconds = seconds_since(t0);

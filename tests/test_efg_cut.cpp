@@ -376,6 +376,51 @@ TEST(NodalSparsity, AddPairsMergesTheMissingPairsIntoSortedRows) {
   EXPECT_EQ(m.innerVector(3 * 4).nonZeros(), 9) << "row 4 couples nodes 1, 3 and 4";
 }
 
+// The kept pattern (with zeros where the longer cut uncoupled nodes, and the pairs it added) and the kept solver
+// must solve like a set-up with the whole cut: same step, same displacements, for both treatments.
+TEST(EfgCut, LocalUpdateThenSolveMatchesAFullSetUp) {
+  // The box clamped at x = 0 and its face x = kEdge pushed down: it bends, and the cut from the top opens.
+  auto loaded = [](CutTreatment treatment, const core::RuledSurface& cut) {
+    EfgProblem p = cut_box_problem(treatment, cut);
+    const int nf = static_cast<int>(p.mesh.boundary_faces.rows());
+    p.penalised_faces.assign(nf, 0);
+    p.loaded_faces.assign(nf, 0);
+    for (int f = 0; f < nf; ++f) {
+      double x = 0.0;
+      for (int k = 0; k < 3; ++k) x += p.mesh.vertices(p.mesh.boundary_faces(f, k), 0) / 3.0;
+      p.penalised_faces[f] = x < 1e-9 * kEdge;
+      p.loaded_faces[f] = x > (1.0 - 1e-9) * kEdge;
+    }
+    p.prescribed_displacement = [](const Eigen::Vector3d&) -> Eigen::Vector3d { return Eigen::Vector3d::Zero(); };
+    p.traction = [](const Eigen::Vector3d&) -> Eigen::Vector3d { return Eigen::Vector3d(0.0, 0.0, -200.0); };
+    return p;
+  };
+  for (CutTreatment treatment : {CutTreatment::enrichment, CutTreatment::visibility}) {
+    const core::RuledSurface full_cut = kinked_cut();
+    EfgModel full(loaded(treatment, full_cut));
+    full.setup_system();
+    full.solve_step(1);
+    // The local model solves with the shorter cut first, so its solver has analysed the shorter cut's pattern;
+    // after the update it starts again from the undeformed body under the same load.
+    EfgProblem shorter = loaded(treatment, full_cut.truncated(0.55 * full_cut.trace_length()));
+    const std::vector<char> loaded_faces = shorter.loaded_faces;
+    const VectorField traction = shorter.traction;
+    EfgModel local(std::move(shorter));
+    local.setup_system();
+    local.solve_step(1);
+    const CutUpdate update = local.advance_cut(full_cut);
+    local.restart(loaded_faces, traction);
+    local.solve_step(1);
+    const double difference = (local.nodal_parameters() - full.nodal_parameters()).cwiseAbs().maxCoeff();
+    const double peak = full.nodal_parameters().cwiseAbs().maxCoeff();
+    std::cout << to_string(treatment) << ": " << update.pairs_added
+              << " node pairs added; max |U_local - U_full| / max |U_full| = " << difference / peak << "\n";
+    EXPECT_GT(update.pairs_added, 0) << "the case should exercise a grown pattern";
+    EXPECT_GT(peak, 0.0);
+    EXPECT_LT(difference / peak, 1e-9);
+  }
+}
+
 TEST(EfgCut, CutCellsAreSplitAndFilledExactly) {
   const core::RuledSurface cut = kinked_cut();
   const core::TetMesh mesh =
