@@ -104,9 +104,9 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                              {"seconds", u.seconds}});
       if (on_step)
         on_step(fmt::format("cut advanced to {:.1f} of {:.1f} mm: shape functions of {} of {} volume points "
-                            "recomputed in {:.2f} s",
+                            "recomputed, {} node pairs added, in {:.2f} s",
                             model.problem().cut->trace_length() * 1e3, full_cut->trace_length() * 1e3,
-                            u.volume_points_recomputed, u.volume_points, u.seconds));
+                            u.volume_points_recomputed, u.volume_points, u.pairs_added, u.seconds));
     }
     const meshless::StepRecord rec = model.solve_step(step);
     if (!vtu_prefix.empty() && c.output.vtu && (step % every == 0 || step == n_steps)) {
