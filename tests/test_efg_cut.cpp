@@ -417,7 +417,7 @@ TEST(EfgCut, LocalUpdateThenSolveMatchesAFullSetUp) {
               << " node pairs added; max |U_local - U_full| / max |U_full| = " << difference / peak << "\n";
     EXPECT_GT(update.pairs_added, 0) << "the case should exercise a grown pattern";
     EXPECT_GT(peak, 0.0);
-    EXPECT_LT(difference / peak, 1e-9);
+    EXPECT_LT(difference / peak, 1e-11);  // achieved: 7.2e-13 (enrichment), 1.6e-13 (visibility)
   }
 }
 
