@@ -98,6 +98,7 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                              {"boundary_points", u.boundary_points},
                              {"modified_nodes", u.modified_nodes},
                              {"pairs_added", u.pairs_added},
+                             {"tables_packed", u.tables_packed},
                              {"quadrature_seconds", u.quadrature_seconds},
                              {"shape_function_seconds", u.shape_function_seconds},
                              {"coupling_seconds", u.coupling_seconds},

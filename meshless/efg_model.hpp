@@ -60,6 +60,7 @@ struct CutUpdate {
   int boundary_points_recomputed = 0;
   int modified_nodes = 0;                      ///< nodes whose weights the new cut modifies
   long long pairs_added = 0;  ///< node-pair blocks added to the kept sparsity pattern (0: the matrix storage stays)
+  bool tables_packed = false;  ///< the shape-function tables ran out of spare slots and were packed (copied)
   double quadrature_seconds = 0.0;             ///< rebuilding the points, matching them, the reuse test, history
   double shape_function_seconds = 0.0;         ///< the MLS evaluations
   double coupling_seconds = 0.0;               ///< incidence, new node pairs, boundary terms, VCI

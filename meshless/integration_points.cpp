@@ -2,8 +2,14 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 #include <exception>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
 #include <utility>
 
 #include "meshless/cut_quadrature.hpp"
@@ -132,18 +138,19 @@ QuadraturePoints lip_quadrature(const core::TetMesh& mesh, int order, const core
 
 namespace {
 
-ShapeTable tabulate(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients,
-                    const ShapeTable* previous, const std::vector<int>* reuse) {
-  const int nq = points.size();
-  std::vector<MlsEvaluation> evals(nq);
-  // Exceptions must not escape an OpenMP region: keep the first one (lowest point index) and rethrow it.
+/// MLS evaluations at the listed points, in parallel. Exceptions must not escape an OpenMP region: the first one
+/// (lowest point index) is kept and rethrown.
+std::vector<MlsEvaluation> evaluate_at(const MlsShapeFunctions& mls, const QuadraturePoints& points,
+                                       const std::vector<int>& which, bool with_gradients) {
+  const int count = static_cast<int>(which.size());
+  std::vector<MlsEvaluation> evals(count);
   std::exception_ptr error;
-  int error_point = nq;
+  int error_point = points.size();
 #pragma omp parallel for schedule(dynamic, 256)
-  for (int q = 0; q < nq; ++q) {
-    if (reuse && (*reuse)[q] >= 0) continue;
+  for (int k = 0; k < count; ++k) {
+    const int q = which[k];
     try {
-      mls.evaluate(points.points.row(q).transpose(), with_gradients, &evals[q], points.sides[q]);
+      mls.evaluate(points.points.row(q).transpose(), with_gradients, &evals[k], points.sides[q]);
     } catch (...) {
 #pragma omp critical(tabulate_error)
       if (q < error_point) {
@@ -153,60 +160,148 @@ ShapeTable tabulate(const MlsShapeFunctions& mls, QuadraturePoints points, bool 
     }
   }
   if (error) std::rethrow_exception(error);
+  return evals;
+}
 
-  auto row_size = [&](int q) {
-    if (reuse && (*reuse)[q] >= 0) return previous->end((*reuse)[q]) - previous->begin((*reuse)[q]);
-    return evals[q].size();
-  };
-  ShapeTable t;
-  t.offsets.resize(nq + 1);
-  t.offsets[0] = 0;
-  for (int q = 0; q < nq; ++q) t.offsets[q + 1] = t.offsets[q] + row_size(q);
-  const int total = t.offsets[nq];
-  t.nodes.resize(total);
-  t.phi.resize(total);
-  t.dphi.resize(3, with_gradients ? total : 0);
-#pragma omp parallel for schedule(static)
-  for (int q = 0; q < nq; ++q) {
-    if (reuse && (*reuse)[q] >= 0) {  // whole rows: most of a local update's table is copied
-      const int from = previous->begin((*reuse)[q]), to = t.offsets[q], len = row_size(q);
-      std::copy_n(previous->nodes.begin() + from, len, t.nodes.begin() + to);
-      std::copy_n(previous->phi.begin() + from, len, t.phi.begin() + to);
-      if (with_gradients) t.dphi.middleCols(to, len) = previous->dphi.middleCols(from, len);
-      continue;
-    }
-    const MlsEvaluation& e = evals[q];
-    for (int k = 0; k < e.size(); ++k) {
-      t.nodes[t.offsets[q] + k] = e.nodes[k];
-      t.phi[t.offsets[q] + k] = e.phi[k];
-      if (with_gradients) t.dphi.col(t.offsets[q] + k) = e.dphi.col(k);
-    }
+/// Empty slot arrays for `capacity` entries.
+void allocate_slots(ShapeTable* t, long long capacity) {
+  if (capacity > std::numeric_limits<int>::max())
+    throw std::length_error(fmt::format("shape-function table: {} entries exceed the 32-bit slot index; use fewer "
+                                        "nodes per support (support_factor) or a coarser cloud", capacity));
+  const auto c = static_cast<std::size_t>(capacity);
+  t->nodes.assign(c, 0);
+  t->phi.assign(c, 0.0);
+  t->dphi.setZero(3, t->gradients ? static_cast<Eigen::Index>(c) : 0);
+  t->slots_used = 0;
+}
+
+/// Write an evaluation into the slots from `at` on.
+void write_row(const MlsEvaluation& e, int at, ShapeTable* t) {
+  for (int k = 0; k < e.size(); ++k) {
+    t->nodes[at + k] = e.nodes[k];
+    t->phi[at + k] = e.phi[k];
+    if (t->gradients) t->dphi.col(at + k) = e.dphi.col(k);
   }
-  t.points = std::move(points.points);
-  t.weights = std::move(points.weights);
-  t.cells = std::move(points.cells);
-  t.sides = std::move(points.sides);
-  t.normals = std::move(points.normals);
-  return t;
+}
+
+long long with_spare(long long entries, double spare_fraction) {
+  return entries + static_cast<long long>(std::ceil(spare_fraction * static_cast<double>(entries)));
+}
+
+void take_points(QuadraturePoints points, ShapeTable* t) {
+  t->points = std::move(points.points);
+  t->weights = std::move(points.weights);
+  t->cells = std::move(points.cells);
+  t->sides = std::move(points.sides);
+  t->normals = std::move(points.normals);
 }
 
 }  // namespace
 
-ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients) {
-  return tabulate(mls, std::move(points), with_gradients, nullptr, nullptr);
+long long ShapeTable::num_entries() const {
+  long long total = 0;
+  for (int q = 0; q < size(); ++q) total += row_end[q] - row_begin[q];
+  return total;
 }
 
 ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients,
-                                    const ShapeTable& previous, const std::vector<int>& reuse) {
-  return tabulate(mls, std::move(points), with_gradients, &previous, &reuse);
+                                    double spare_fraction) {
+  const int nq = points.size();
+  std::vector<int> all(nq);
+  std::iota(all.begin(), all.end(), 0);
+  const std::vector<MlsEvaluation> evals = evaluate_at(mls, points, all, with_gradients);
+  ShapeTable t;
+  t.gradients = with_gradients;
+  t.row_begin.resize(nq);
+  t.row_end.resize(nq);
+  long long total = 0;
+  for (int q = 0; q < nq; ++q) total += evals[q].size();
+  allocate_slots(&t, with_spare(total, spare_fraction));
+  int at = 0;
+  for (int q = 0; q < nq; ++q) {
+    t.row_begin[q] = at;
+    at += evals[q].size();
+    t.row_end[q] = at;
+  }
+  t.slots_used = at;
+#pragma omp parallel for schedule(static)
+  for (int q = 0; q < nq; ++q) write_row(evals[q], t.row_begin[q], &t);
+  take_points(std::move(points), &t);
+  return t;
+}
+
+TableUpdate update_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, const std::vector<int>& reuse,
+                                   double spare_fraction, ShapeTable* table) {
+  const int nq = points.size();
+  std::vector<int> evaluated;
+  for (int q = 0; q < nq; ++q)
+    if (reuse[q] < 0) evaluated.push_back(q);
+  const std::vector<MlsEvaluation> evals = evaluate_at(mls, points, evaluated, table->gradients);
+  TableUpdate report;
+  report.rows_evaluated = static_cast<int>(evaluated.size());
+
+  long long new_entries = 0, kept_entries = 0;
+  for (const MlsEvaluation& e : evals) new_entries += e.size();
+  for (int q = 0; q < nq; ++q)
+    if (reuse[q] >= 0) kept_entries += table->end(reuse[q]) - table->begin(reuse[q]);
+  std::vector<int> row_begin(nq), row_end(nq);
+  const long long capacity = static_cast<long long>(table->nodes.size());
+  if (table->slots_used + new_entries <= capacity) {
+    // In place: the kept rows stay in their slots; the evaluated ones go into spare slots.
+    for (int q = 0; q < nq; ++q)
+      if (reuse[q] >= 0) {
+        row_begin[q] = table->begin(reuse[q]);
+        row_end[q] = table->end(reuse[q]);
+      }
+  } else {
+    // Out of spare slots: pack the kept rows into new arrays with spare room again (a copy, as a full set-up's).
+    ShapeTable packed;
+    packed.gradients = table->gradients;
+    allocate_slots(&packed, with_spare(kept_entries + new_entries, spare_fraction));
+    int at = 0;
+    for (int q = 0; q < nq; ++q)
+      if (reuse[q] >= 0) {
+        row_begin[q] = at;
+        at += table->end(reuse[q]) - table->begin(reuse[q]);
+        row_end[q] = at;
+      }
+#pragma omp parallel for schedule(static)
+    for (int q = 0; q < nq; ++q) {
+      if (reuse[q] < 0) continue;
+      const int from = table->begin(reuse[q]), len = row_end[q] - row_begin[q];
+      std::copy_n(table->nodes.begin() + from, len, packed.nodes.begin() + row_begin[q]);
+      std::copy_n(table->phi.begin() + from, len, packed.phi.begin() + row_begin[q]);
+      if (packed.gradients) packed.dphi.middleCols(row_begin[q], len) = table->dphi.middleCols(from, len);
+    }
+    packed.slots_used = at;
+    table->nodes.swap(packed.nodes);
+    table->phi.swap(packed.phi);
+    table->dphi.swap(packed.dphi);
+    table->slots_used = packed.slots_used;
+    report.packed = true;
+  }
+  int at = table->slots_used;
+  for (std::size_t k = 0; k < evaluated.size(); ++k) {
+    row_begin[evaluated[k]] = at;
+    at += evals[k].size();
+    row_end[evaluated[k]] = at;
+  }
+#pragma omp parallel for schedule(static)
+  for (int k = 0; k < report.rows_evaluated; ++k) write_row(evals[k], row_begin[evaluated[k]], table);
+  table->slots_used = at;
+  table->row_begin = std::move(row_begin);
+  table->row_end = std::move(row_end);
+  take_points(std::move(points), table);
+  return report;
 }
 
 NodeIncidence::NodeIncidence(const ShapeTable& table, int num_nodes) {
   offsets.assign(num_nodes + 1, 0);
-  for (int node : table.nodes) ++offsets[node + 1];
+  for (int q = 0; q < table.size(); ++q)
+    for (int s = table.begin(q); s < table.end(q); ++s) ++offsets[table.nodes[s] + 1];
   for (int i = 0; i < num_nodes; ++i) offsets[i + 1] += offsets[i];
-  slots.resize(table.nodes.size());
-  points.resize(table.nodes.size());
+  slots.resize(offsets.back());
+  points.resize(offsets.back());
   std::vector<int> fill(offsets.begin(), offsets.end() - 1);
   for (int q = 0; q < table.size(); ++q)
     for (int s = table.begin(q); s < table.end(q); ++s) {

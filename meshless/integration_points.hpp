@@ -46,34 +46,52 @@ QuadraturePoints boundary_quadrature(const core::TetMesh& mesh, int order, const
 /// outward normal +n), n the panel normal; cells = the tetrahedron.
 QuadraturePoints lip_quadrature(const core::TetMesh& mesh, int order, const core::RuledSurface& cut);
 
-/// Shape-function values at a set of points, in compressed-row layout: the nodes of point q are
-/// nodes[offsets[q] .. offsets[q+1]), ascending, with phi and dphi in the same slots.
+/// Shape-function values at a set of points. The nodes of point q sit in the slots [begin(q), end(q)) of nodes,
+/// phi and dphi, ascending. A table made from scratch stores its rows one after another. A local update (the cut
+/// advanced, paper §4) keeps every row it reuses where it is, writes the rows it evaluates again into spare slots
+/// after the last one in use, and retires the slots of the rows they replace: so iterate rows through begin/end,
+/// never the slot arrays whole. When the spare slots run out, the update packs the rows into new arrays.
 struct ShapeTable {
   core::PointMatrix points;     ///< #q by 3 [m]
   Eigen::VectorXd weights;      ///< #q quadrature weights [m^3] (volume) or [m^2] (surface)
   std::vector<int> cells;       ///< #q, as QuadraturePoints::cells
   std::vector<std::int8_t> sides;  ///< #q, as QuadraturePoints::sides
   Eigen::Matrix3Xd normals;     ///< as QuadraturePoints::normals
-  std::vector<int> offsets;     ///< #q + 1
-  std::vector<int> nodes;       ///< offsets.back()
-  std::vector<double> phi;      ///< offsets.back(), phi_i(X_q)
-  Eigen::Matrix3Xd dphi;        ///< 3 by offsets.back(), grad phi_i(X_q) [1/m]; 3 by 0 without gradients
+  std::vector<int> row_begin;   ///< #q: the first slot of point q
+  std::vector<int> row_end;     ///< #q: one past its last slot
+  std::vector<int> nodes;       ///< per slot: the node; nodes.size() is the capacity
+  std::vector<double> phi;      ///< per slot: phi_i(X_q)
+  Eigen::Matrix3Xd dphi;        ///< 3 by capacity: grad phi_i(X_q) [1/m]; 3 by 0 without gradients
+  int slots_used = 0;           ///< slots [0, slots_used) hold rows or retired rows; the rest are spare
+  bool gradients = false;       ///< whether dphi is tabulated
 
   int size() const { return static_cast<int>(weights.size()); }
-  int begin(int q) const { return offsets[q]; }
-  int end(int q) const { return offsets[q + 1]; }
-  bool has_gradients() const { return dphi.cols() > 0; }
+  int begin(int q) const { return row_begin[q]; }
+  int end(int q) const { return row_end[q]; }
+  bool has_gradients() const { return gradients; }
   bool on_lip(int q) const { return sides[q] != 0; }
+  /// The (point, node) entries of all rows: the slots in use less the retired ones.
+  long long num_entries() const;
 };
 
 /// Evaluate the MLS shape functions at every point (in parallel when OpenMP is available), each with its side hint.
+/// `spare_fraction` of the entries is kept as spare slots for local updates (0 for a body without a cut).
 /// @throws SingularMomentMatrix (from MlsShapeFunctions) naming the first failing point and its neighbour count
-ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients);
-
-/// Same, but point q copies row reuse[q] of `previous` instead of evaluating when reuse[q] >= 0 (a local update
-/// after the cut advanced: only the points whose shape functions changed are evaluated again).
 ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients,
-                                    const ShapeTable& previous, const std::vector<int>& reuse);
+                                    double spare_fraction = 0.0);
+
+/// What a local update of a table did.
+struct TableUpdate {
+  int rows_evaluated = 0;  ///< points whose shape functions were evaluated again
+  bool packed = false;     ///< the spare slots ran out and the rows were packed into new arrays
+};
+
+/// A local update in place: `table` now holds the shape functions of `points`, where point q reuses row reuse[q]
+/// of the table as it was (when >= 0: the row is kept in its slots, not copied) and is evaluated otherwise.
+/// `spare_fraction` is the spare room kept if the rows have to be packed. The table's gradient setting is kept.
+/// @throws SingularMomentMatrix as above; the table is then unchanged
+TableUpdate update_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, const std::vector<int>& reuse,
+                                   double spare_fraction, ShapeTable* table);
 
 /// The transpose of a ShapeTable's node lists: for node i, the table slots (entries of nodes/phi/dphi) where it
 /// appears, and the point each slot belongs to. Lets assembly run row by row (one node's equations at a time),

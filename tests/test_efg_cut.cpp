@@ -336,11 +336,12 @@ TEST(EfgCut, LocalUpdateGivesTheStiffnessOfAFullSetUp) {
 ShapeTable node_lists(const std::vector<std::vector<int>>& points) {
   ShapeTable t;
   t.weights = Eigen::VectorXd::Ones(static_cast<Eigen::Index>(points.size()));
-  t.offsets = {0};
   for (const auto& p : points) {
+    t.row_begin.push_back(static_cast<int>(t.nodes.size()));
     t.nodes.insert(t.nodes.end(), p.begin(), p.end());
-    t.offsets.push_back(static_cast<int>(t.nodes.size()));
+    t.row_end.push_back(static_cast<int>(t.nodes.size()));
   }
+  t.slots_used = static_cast<int>(t.nodes.size());
   return t;
 }
 
@@ -374,6 +375,64 @@ TEST(NodalSparsity, AddPairsMergesTheMissingPairsIntoSortedRows) {
   EXPECT_EQ(m.valuePtr(), storage) << "the spare room took the new pairs";
   EXPECT_EQ(m.coeff(3 * 4 + 2, 3 * 1 + 0), 0.0);
   EXPECT_EQ(m.innerVector(3 * 4).nonZeros(), 9) << "row 4 couples nodes 1, 3 and 4";
+}
+
+/// The rows of two tables hold the same nodes and the same values, bit for bit.
+void expect_same_rows(const ShapeTable& a, const ShapeTable& b) {
+  ASSERT_EQ(a.size(), b.size());
+  for (int q = 0; q < a.size(); ++q) {
+    ASSERT_EQ(a.end(q) - a.begin(q), b.end(q) - b.begin(q)) << "point " << q;
+    for (int k = 0; k < a.end(q) - a.begin(q); ++k) {
+      ASSERT_EQ(a.nodes[a.begin(q) + k], b.nodes[b.begin(q) + k]);
+      ASSERT_EQ(a.phi[a.begin(q) + k], b.phi[b.begin(q) + k]);
+      ASSERT_EQ(a.dphi.col(a.begin(q) + k), b.dphi.col(b.begin(q) + k));
+    }
+  }
+}
+
+// A local update keeps each reused row in its slots and writes the evaluated rows into the spare slots; without
+// room it packs the rows into new arrays. Either way the table equals a fresh tabulation of the new points, here
+// the old ones in reverse order with every third one evaluated again.
+TEST(ShapeTable, LocalUpdateKeepsReusedRowsInPlaceAndPacksWhenOutOfRoom) {
+  const CutCloud cloud(CutTreatment::enrichment, kTransition);
+  const QuadraturePoints points = volume_quadrature(cloud.mesh, 2, nullptr);
+  const int nq = points.size();
+  QuadraturePoints reversed = points;
+  std::vector<int> reuse(nq);
+  for (int q = 0; q < nq; ++q) {
+    reversed.points.row(q) = points.points.row(nq - 1 - q);
+    reversed.weights[q] = points.weights[nq - 1 - q];
+    reversed.cells[q] = points.cells[nq - 1 - q];
+    reversed.sides[q] = points.sides[nq - 1 - q];
+    reuse[q] = q % 3 == 0 ? -1 : nq - 1 - q;
+  }
+  const ShapeTable fresh = tabulate_shape_functions(*cloud.mls, reversed, true);
+
+  ShapeTable roomy = tabulate_shape_functions(*cloud.mls, points, true, 0.5);
+  const long long entries = roomy.num_entries();
+  EXPECT_EQ(roomy.slots_used, entries);
+  EXPECT_EQ(static_cast<long long>(roomy.nodes.size()), entries + (entries + 1) / 2);
+  const int kept_row_begin = roomy.begin(nq - 2);  // reused as point 1
+  const TableUpdate in_place = update_shape_functions(*cloud.mls, reversed, reuse, 0.5, &roomy);
+  EXPECT_FALSE(in_place.packed);
+  EXPECT_EQ(in_place.rows_evaluated, (nq + 2) / 3);
+  EXPECT_EQ(roomy.begin(1), kept_row_begin) << "a reused row stays in its slots";
+  EXPECT_GT(roomy.begin(0), entries - 1) << "an evaluated row goes into a spare slot";
+  EXPECT_EQ(roomy.num_entries(), entries);
+  expect_same_rows(roomy, fresh);
+
+  ShapeTable tight = tabulate_shape_functions(*cloud.mls, points, true);
+  const TableUpdate packing = update_shape_functions(*cloud.mls, reversed, reuse, 0.5, &tight);
+  EXPECT_TRUE(packing.packed);
+  EXPECT_EQ(tight.slots_used, entries) << "packed: no retired slot is left";
+  EXPECT_EQ(static_cast<long long>(tight.nodes.size()), entries + (entries + 1) / 2) << "with spare room again";
+  expect_same_rows(tight, fresh);
+
+  // The incidence skips the retired slots: the same node lists as the fresh table's.
+  const int n = static_cast<int>(cloud.mesh.num_vertices());
+  const NodeIncidence a(fresh, n), b(roomy, n);
+  EXPECT_EQ(a.offsets, b.offsets);
+  EXPECT_EQ(a.points, b.points);
 }
 
 // The kept pattern (with zeros where the longer cut uncoupled nodes, and the pairs it added) and the kept solver
