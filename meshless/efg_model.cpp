@@ -133,6 +133,8 @@ void EfgModel::setup_system() {
   states_.assign(nq, core::KelvinState{});
   const int n = mesh.num_vertices();
   u_ = Eigen::VectorXd::Zero(3 * n);
+  volume_incidence_ = NodeIncidence(volume_, n);
+  surface_incidence_ = NodeIncidence(surface_, n);
   build_couplings(true);  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
   timings_.setup_seconds += seconds_since(t0);
   set_up_ = true;
@@ -141,8 +143,6 @@ void EfgModel::setup_system() {
 void EfgModel::build_couplings(bool new_pattern) {
   const core::TetMesh& mesh = problem_.mesh;
   const int n = mesh.num_vertices();
-  volume_incidence_ = NodeIncidence(volume_, n);
-  surface_incidence_ = NodeIncidence(surface_, n);
   for (int i = 0; i < n; ++i)
     if (volume_incidence_.offsets[i + 1] == volume_incidence_.offsets[i])
       throw std::runtime_error(fmt::format(
@@ -195,7 +195,7 @@ void EfgModel::build_couplings(bool new_pattern) {
   const int nq = volume_.size();
   strain_.assign(nq, core::Vector6::Zero());
   stress_.assign(nq, core::Vector6::Zero());
-  tangent_.assign(nq, core::Matrix6::Zero());
+  tangent_.resize(nq);  // scratch of the assembly, which sets it first (update_material): not cleared
   residual_ = Eigen::VectorXd::Zero(3 * n);
   external_ = Eigen::VectorXd::Zero(3 * n);
 
@@ -333,6 +333,18 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   // change only if its support meets the cut (old or new), so points farther than 2 rho_max from both cuts are
   // reused without looking.
   const double reach = 2.0 * radii_->max_radius();
+  // A cheap bound first: the distance to a cut is at least the distance of the projections along its depth
+  // direction (the cut is open upward), so a point whose projection is farther than `reach` from the box around
+  // both traces is far from both cuts.
+  const Eigen::Vector3d depth_direction = cut.direction();
+  Eigen::AlignedBox3d traces;
+  for (const core::RuledSurface* c : {&cut, previous_cut ? &*previous_cut : nullptr})
+    if (c)
+      for (const Eigen::Vector3d& p : c->top()) traces.extend(p - p.dot(c->direction()) * c->direction());
+  const bool same_direction = !previous_cut || previous_cut->direction() == depth_direction;
+  auto may_be_near = [&](const Eigen::Vector3d& x) {
+    return !same_direction || traces.exteriorDistance(x - x.dot(depth_direction) * depth_direction) < reach;
+  };
   std::unique_ptr<NodesWithNewEnrichment> enrichment;
   if (before && before->treatment() == CutTreatment::enrichment && cut_weights_->treatment() == CutTreatment::enrichment &&
       before->front_transition() == cut_weights_->front_transition())
@@ -344,7 +356,8 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
       thread_local std::vector<NodeHit> hits;
       if (reuse[q] < 0) return;
       const Eigen::Vector3d x = points.points.row(q).transpose();
-      const bool near = cut.frame(x).distance < reach || (previous_cut && previous_cut->frame(x).distance < reach);
+      const bool near = may_be_near(x) && (cut.frame(x).distance < reach ||
+                                           (previous_cut && previous_cut->frame(x).distance < reach));
       if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits, enrichment.get()))
         changed[q] = 1;
     });
@@ -364,8 +377,11 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   // History (eqs. 15-16): a point that is still there keeps its state; a new point (a cell split differently)
   // takes the state of the nearest old point of the same cell.
   std::vector<core::KelvinState> states(vq.size());
-  std::unordered_map<int, std::vector<int>> old_points_of_cell;
-  for (int q = 0; q < volume_.size(); ++q) old_points_of_cell[volume_.cells[q]].push_back(q);
+  std::unordered_map<int, std::vector<int>> old_points_of_cell;  // only the cells that have new points
+  for (int q = 0; q < vq.size(); ++q)
+    if (volume_same[q] < 0) old_points_of_cell[vq.cells[q]];
+  for (int q = 0; q < volume_.size(); ++q)
+    if (const auto it = old_points_of_cell.find(volume_.cells[q]); it != old_points_of_cell.end()) it->second.push_back(q);
   for (int q = 0; q < vq.size(); ++q) {
     if (volume_same[q] >= 0) {
       states[q] = states_[volume_same[q]];
@@ -383,13 +399,19 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
 
   report.quadrature_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
-  report.tables_packed = update_shape_functions(*mls_, std::move(vq), volume_reuse, kSpareTableFraction, &volume_).packed;
-  report.tables_packed |= update_shape_functions(*mls_, std::move(sq), surface_reuse, kSpareTableFraction, &surface_).packed;
+  const bool volume_packed = update_shape_functions(*mls_, std::move(vq), volume_reuse, kSpareTableFraction, &volume_).packed;
+  const bool surface_packed = update_shape_functions(*mls_, std::move(sq), surface_reuse, kSpareTableFraction, &surface_).packed;
+  report.tables_packed = volume_packed || surface_packed;
   report.shape_function_seconds = seconds_since(t1);
   states_ = std::move(states);
 
   // A reused row keeps its nodes, whose pairs the pattern holds; only the recomputed rows can bring a new pair.
   const auto t2 = std::chrono::steady_clock::now();
+  // The incidence follows the tables: merged from the one before when the kept rows stayed in their slots.
+  const int n = problem_.mesh.num_vertices();
+  volume_incidence_ = volume_packed ? NodeIncidence(volume_, n) : NodeIncidence(volume_incidence_, volume_, volume_reuse);
+  surface_incidence_ =
+      surface_packed ? NodeIncidence(surface_, n) : NodeIncidence(surface_incidence_, surface_, surface_reuse);
   auto recomputed_rows = [](const std::vector<int>& reuse) {
     std::vector<int> rows;
     for (int q = 0; q < static_cast<int>(reuse.size()); ++q)

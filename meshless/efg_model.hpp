@@ -177,7 +177,8 @@ class EfgModel {
   void install_cut(const core::RuledSurface* cut);
   /// Volume points, and boundary points (outer faces and the lips of the cut), for the current problem.
   void build_quadrature(QuadraturePoints* volume, QuadraturePoints* surface) const;
-  /// Everything that follows from the tabulated points: incidence, sparsity, boundary terms, VCI, statistics.
+  /// Everything that follows from the tabulated points and their incidence (the caller builds it): sparsity,
+  /// boundary terms, VCI, statistics.
   /// Without new_pattern the sparsity pattern, the matrix storage and the linear solver's choice stay as they
   /// are: the caller made sure the pattern holds every node pair of the tables (advance_cut).
   void build_couplings(bool new_pattern);

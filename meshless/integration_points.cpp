@@ -295,7 +295,7 @@ TableUpdate update_shape_functions(const MlsShapeFunctions& mls, QuadraturePoint
   return report;
 }
 
-NodeIncidence::NodeIncidence(const ShapeTable& table, int num_nodes) {
+NodeIncidence::NodeIncidence(const ShapeTable& table, int num_nodes) : num_points(table.size()) {
   offsets.assign(num_nodes + 1, 0);
   for (int q = 0; q < table.size(); ++q)
     for (int s = table.begin(q); s < table.end(q); ++s) ++offsets[table.nodes[s] + 1];
@@ -309,6 +309,74 @@ NodeIncidence::NodeIncidence(const ShapeTable& table, int num_nodes) {
       slots[at] = s;
       points[at] = q;
     }
+}
+
+NodeIncidence::NodeIncidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse) {
+  const int num_nodes = static_cast<int>(before.offsets.size()) - 1;
+  const int nq = table.size();
+  const int old_points = before.num_points;
+  num_points = nq;
+  std::vector<int> new_of_old(old_points, -1), evaluated;
+  int last = -1;
+  for (int q = 0; q < nq; ++q) {
+    if (reuse[q] < 0) {
+      evaluated.push_back(q);
+      continue;
+    }
+    if (reuse[q] <= last) {  // kept rows out of order: the merge below would not sort them
+      *this = NodeIncidence(table, num_nodes);
+      return;
+    }
+    last = reuse[q];
+    new_of_old.at(reuse[q]) = q;
+  }
+
+  // The evaluated rows' entries by node, in increasing point order.
+  std::vector<int> added_offsets(num_nodes + 1, 0);
+  for (int q : evaluated)
+    for (int s = table.begin(q); s < table.end(q); ++s) ++added_offsets[table.nodes[s] + 1];
+  for (int i = 0; i < num_nodes; ++i) added_offsets[i + 1] += added_offsets[i];
+  std::vector<int> added_slots(added_offsets.back()), added_points(added_offsets.back());
+  {
+    std::vector<int> fill(added_offsets.begin(), added_offsets.end() - 1);
+    for (int q : evaluated)
+      for (int s = table.begin(q); s < table.end(q); ++s) {
+        const int at = fill[table.nodes[s]]++;
+        added_slots[at] = s;
+        added_points[at] = q;
+      }
+  }
+
+  // Node by node: the kept entries (still in increasing point order) merged with the added ones.
+  offsets.assign(num_nodes + 1, 0);
+#pragma omp parallel for schedule(static, 256)
+  for (int i = 0; i < num_nodes; ++i) {
+    int kept = 0;
+    for (int e = before.offsets[i]; e < before.offsets[i + 1]; ++e) kept += new_of_old[before.points[e]] >= 0;
+    offsets[i + 1] = kept + added_offsets[i + 1] - added_offsets[i];
+  }
+  for (int i = 0; i < num_nodes; ++i) offsets[i + 1] += offsets[i];
+  slots.resize(offsets.back());
+  points.resize(offsets.back());
+#pragma omp parallel for schedule(static, 256)
+  for (int i = 0; i < num_nodes; ++i) {
+    int at = offsets[i], a = added_offsets[i];
+    for (int e = before.offsets[i]; e < before.offsets[i + 1]; ++e) {
+      const int q = new_of_old[before.points[e]];
+      if (q < 0) continue;
+      for (; a < added_offsets[i + 1] && added_points[a] < q; ++a, ++at) {
+        slots[at] = added_slots[a];
+        points[at] = added_points[a];
+      }
+      slots[at] = before.slots[e];
+      points[at] = q;
+      ++at;
+    }
+    for (; a < added_offsets[i + 1]; ++a, ++at) {
+      slots[at] = added_slots[a];
+      points[at] = added_points[a];
+    }
+  }
 }
 
 }  // namespace meshless

@@ -100,8 +100,16 @@ struct NodeIncidence {
   std::vector<int> offsets;  ///< #nodes + 1
   std::vector<int> slots;    ///< slot into the table's nodes/phi/dphi arrays
   std::vector<int> points;   ///< the table point owning that slot
+  int num_points = 0;        ///< the table's point count
   NodeIncidence() = default;
   NodeIncidence(const ShapeTable& table, int num_nodes);
+  /// The same as NodeIncidence(table, num_nodes) after a local update that kept its rows in place
+  /// (update_shape_functions without packing; `reuse` as given to it), built from the incidence `before` the update
+  /// instead of transposing the whole table: a kept row's entries keep their slots and take the point's new
+  /// number; the evaluated rows' entries are merged in. That needs the kept rows in the order they had (reuse
+  /// increasing over them), which holds since the quadrature is built cell by cell; otherwise it transposes the
+  /// table.
+  NodeIncidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse);
 };
 
 }  // namespace meshless

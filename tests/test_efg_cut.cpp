@@ -303,9 +303,17 @@ TEST(EfgCut, LocalUpdateGivesTheStiffnessOfAFullSetUp) {
     EfgModel full(cut_box_problem(treatment, full_cut));
     full.setup_system();
     full.assemble_system(true);
+    // Two steps of an incision: the first fits in the tables' spare slots (rows and incidence updated in place);
+    // under the enrichment the second evaluates more rows again than the room left and packs the tables.
     EfgModel local(cut_box_problem(treatment, full_cut.truncated(0.55 * full_cut.trace_length())));
     local.setup_system();
+    const CutUpdate first = local.advance_cut(full_cut.truncated(0.6 * full_cut.trace_length()));
+    EXPECT_FALSE(first.tables_packed);
     const CutUpdate update = local.advance_cut(full_cut);
+    if (treatment == CutTreatment::enrichment) EXPECT_TRUE(update.tables_packed);
+    std::cout << "  first step: " << first.volume_points_recomputed << " of " << first.volume_points
+              << " volume points recomputed; second: " << update.volume_points_recomputed
+              << (update.tables_packed ? ", tables packed\n" : ", in place\n");
     local.assemble_system(true);
     const SparseMatrix& a = full.system_matrix();
     const SparseMatrix& b = local.system_matrix();
@@ -408,12 +416,12 @@ TEST(ShapeTable, LocalUpdateKeepsReusedRowsInPlaceAndPacksWhenOutOfRoom) {
   }
   const ShapeTable fresh = tabulate_shape_functions(*cloud.mls, reversed, true);
 
-  ShapeTable roomy = tabulate_shape_functions(*cloud.mls, points, true, 0.5);
+  ShapeTable roomy = tabulate_shape_functions(*cloud.mls, points, true, 1.0);
   const long long entries = roomy.num_entries();
   EXPECT_EQ(roomy.slots_used, entries);
-  EXPECT_EQ(static_cast<long long>(roomy.nodes.size()), entries + (entries + 1) / 2);
+  EXPECT_EQ(static_cast<long long>(roomy.nodes.size()), 2 * entries);
   const int kept_row_begin = roomy.begin(nq - 2);  // reused as point 1
-  const TableUpdate in_place = update_shape_functions(*cloud.mls, reversed, reuse, 0.5, &roomy);
+  const TableUpdate in_place = update_shape_functions(*cloud.mls, reversed, reuse, 1.0, &roomy);
   EXPECT_FALSE(in_place.packed);
   EXPECT_EQ(in_place.rows_evaluated, (nq + 2) / 3);
   EXPECT_EQ(roomy.begin(1), kept_row_begin) << "a reused row stays in its slots";
@@ -433,6 +441,34 @@ TEST(ShapeTable, LocalUpdateKeepsReusedRowsInPlaceAndPacksWhenOutOfRoom) {
   const NodeIncidence a(fresh, n), b(roomy, n);
   EXPECT_EQ(a.offsets, b.offsets);
   EXPECT_EQ(a.points, b.points);
+
+  // As after a cut advanced: every fifth point gone, every seventh new (a point of the set above), every third
+  // evaluated again, the kept ones in their order. The incidence merged from the one before equals a transpose.
+  QuadraturePoints next;
+  std::vector<int> next_reuse;
+  for (int q = 0; q < nq; ++q) {
+    if (q % 5 == 0) continue;
+    auto push = [&](int from, int reused) {
+      next.points.conservativeResize(next.points.rows() + 1, 3);
+      next.points.row(next.points.rows() - 1) = points.points.row(from);
+      next.weights.conservativeResize(next.weights.size() + 1);
+      next.weights[next.weights.size() - 1] = points.weights[from];
+      next.cells.push_back(points.cells[from]);
+      next.sides.push_back(points.sides[from]);
+      next_reuse.push_back(reused);
+    };
+    if (q % 7 == 0) push((3 * q) % nq, -1);
+    push(nq - 1 - q, q % 3 == 0 ? -1 : q);  // point q of the reversed set is points[nq - 1 - q]
+  }
+  const NodeIncidence before_update(roomy, n);
+  const TableUpdate second = update_shape_functions(*cloud.mls, next, next_reuse, 1.0, &roomy);
+  ASSERT_FALSE(second.packed);
+  const NodeIncidence merged(before_update, roomy, next_reuse), transposed(roomy, n);
+  EXPECT_EQ(merged.num_points, next.size());
+  EXPECT_EQ(merged.offsets, transposed.offsets);
+  EXPECT_EQ(merged.slots, transposed.slots);
+  EXPECT_EQ(merged.points, transposed.points);
+  expect_same_rows(roomy, tabulate_shape_functions(*cloud.mls, next, true));
 }
 
 // The kept pattern (with zeros where the longer cut uncoupled nodes, and the pairs it added) and the kept solver
