@@ -2,8 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -18,6 +21,9 @@
 #include "experiments/meshless_runs.hpp"
 #include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
+#include "meshless/efg_problem.hpp"
+#include "meshless/surrogate.hpp"
+#include "meshless/surrogate_builder.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace experiments {
@@ -116,6 +122,9 @@ int newton_iterations(const ModelResult& r) {
   return n;
 }
 
+/// Queries timed per force (their median is reported): enough to smooth out the scheduler's interruptions.
+constexpr int kQueriesPerForce = 2001;
+
 json time_one_force(const core::Case& c, const core::Geometry& g, double force, Progress* progress) {
   json row = {{"force_N", force}};
   try {
@@ -142,6 +151,45 @@ json time_one_force(const core::Case& c, const core::Geometry& g, double force, 
   return row;
 }
 
+/// Train the surrogate of `config` (as `tissue fit` does) and query it at `stressed`'s load point for each force
+/// along its force direction: the median wall time of a query over many repetitions, and the answer.
+json time_surrogate(const std::string& config, const core::Case& stressed, const std::vector<double>& forces,
+                    Progress* progress) {
+  const core::Case c = core::load_case(config);
+  progress->step(fmt::format("timing: training the surrogate of {} ({} full solves, as tissue fit)", config,
+                             6 * c.surrogate.contact_points.size() * c.surrogate.force_levels));
+  const auto t0 = std::chrono::steady_clock::now();
+  core::GeometryOptions geometry;
+  geometry.build_fem_mesh = false;
+  const core::Geometry g = core::build_geometry(c, geometry);
+  meshless::SurrogateBuildReport report;
+  const meshless::Surrogate surrogate(
+      meshless::build_surrogate(meshless::problem_from_case(c, g), c.surrogate, {}, {}, &report));
+  const double training_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  progress->step(fmt::format("timing: {} surrogate queries per force", kQueriesPerForce));
+  const json rows = surrogate_query_timing(surrogate, stressed.load.point, stressed.load.force.normalized(), forces,
+                                           kQueriesPerForce);
+  return {{"status", "measured"},
+          {"config", config},
+          {"node_spacing_mm", 1e3 * c.meshless.node_spacing},
+          {"surface_nodes", surrogate.num_surface_nodes()},
+          {"training_solves", report.training_solves},
+          {"training_seconds", training_seconds},
+          {"queries_per_force", kQueriesPerForce},
+          {"rows", rows}};
+}
+
+std::string surrogate_cell(const json& surrogate, std::size_t row) {
+  if (surrogate.at("status") != "measured") return surrogate.at("status").get<std::string>();
+  const json& r = surrogate.at("rows").at(row);
+  std::string flags;
+  if (!r.at("force_in_range").get<bool>()) flags += ", force clamped to the trained range";
+  if (!r.at("on_trained_contact").get<bool>()) flags += ", off the trained contact";
+  return fmt::format("{:.1f} µs (|u| = {:.3f} mm{})", 1e6 * r.at("seconds").get<double>(),
+                     r.at("contact_displacement_mm").get<double>(), flags);
+}
+
 std::string timing_cell(const json& model) {
   if (model.contains("error")) return "failed: " + model.at("error").get<std::string>();
   return fmt::format("{:.2f} s ({} Newton, peak {:.3f} mm)", model.at("seconds").get<double>(),
@@ -153,20 +201,36 @@ std::string timing_md(const json& timing) {
       "# Fig. 9 analogue: the time to compute one deformation result\n\n"
       "Case `{}`, {} time step(s) per result, forces along the case's force direction at its load point. Each "
       "time is the model's whole run for that force (set-up, assembly and solves), geometry excluded (built once: "
-      "{:.1f} s).\n\n| force [N] | meshless, full solve | FEM reference | meshless / FEM | surrogate query |\n"
-      "|---|---|---|---|---|\n",
+      "{:.1f} s).\n\n| force [N] | meshless, full solve | FEM reference | meshless / FEM | surrogate query | "
+      "meshless / surrogate |\n|---|---|---|---|---|---|\n",
       timing.at("config").get<std::string>(), timing.at("steps").get<int>(),
       timing.at("geometry_seconds").get<double>());
-  for (const json& r : timing.at("rows")) {
-    const json& efg = r.at("meshless");
-    const json& fem = r.at("fem");
+  const json& surrogate = timing.at("surrogate");
+  const bool measured = surrogate.at("status") == "measured";
+  const json& rows = timing.at("rows");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const json& efg = rows[i].at("meshless");
+    const json& fem = rows[i].at("fem");
     const std::string ratio = efg.contains("seconds") && fem.contains("seconds")
                                   ? fmt::format("{:.2f}", efg.at("seconds").get<double>() / fem.at("seconds").get<double>())
                                   : std::string("–");
-    md += fmt::format("| {:.2f} | {} | {} | {} | {} |\n", r.at("force_N").get<double>(), timing_cell(efg),
-                      timing_cell(fem), ratio, timing.at("surrogate").at("status").get<std::string>());
+    const std::string speedup =
+        measured && efg.contains("seconds")
+            ? fmt::format("{:.3g}", efg.at("seconds").get<double>() / surrogate.at("rows").at(i).at("seconds").get<double>())
+            : std::string("–");
+    md += fmt::format("| {:.2f} | {} | {} | {} | {} | {} |\n", rows[i].at("force_N").get<double>(), timing_cell(efg),
+                      timing_cell(fem), ratio, surrogate_cell(surrogate, i), speedup);
   }
-  md += "\nThe ratio is measured in this run, on this machine: compare it, not the absolute seconds.\n";
+  md += "\nThe ratios are measured in this run, on this machine: compare them, not the absolute seconds.\n";
+  if (measured)
+    md += fmt::format(
+        "\nThe surrogate (paper §3, docs/SURROGATE.md) is trained on `{}` ({:.0f} mm node spacing, {} surface "
+        "nodes), once, in {} full solves and {:.1f} s; a query is the median of {} calls, answering the contact "
+        "displacement and every surface node's. |u| is its contact node's displacement at the end of its "
+        "training ramp.\n",
+        surrogate.at("config").get<std::string>(), surrogate.at("node_spacing_mm").get<double>(),
+        surrogate.at("surface_nodes").get<int>(), surrogate.at("training_solves").get<int>(),
+        surrogate.at("training_seconds").get<double>(), surrogate.at("queries_per_force").get<int>());
   return md;
 }
 
@@ -187,6 +251,29 @@ void plot_timing(const core::OutputDirectory& out, json* timing) {
 }
 
 }  // namespace
+
+json surrogate_query_timing(const meshless::Surrogate& surrogate, const Eigen::Vector3d& point,
+                            const Eigen::Vector3d& direction, const std::vector<double>& forces, int queries) {
+  if (queries < 1) throw std::invalid_argument("surrogate_query_timing: at least one query per force");
+  core::PointMatrix u(surrogate.num_surface_nodes(), 3);  // the query's buffer, allocated once
+  json rows = json::array();
+  std::vector<double> seconds(queries);
+  for (double f : forces) {
+    meshless::SurrogateResponse r;
+    for (int k = 0; k < queries; ++k) {
+      const auto q0 = std::chrono::steady_clock::now();
+      r = surrogate.query(point, f * direction, &u);
+      seconds[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - q0).count();
+    }
+    std::nth_element(seconds.begin(), seconds.begin() + queries / 2, seconds.end());
+    rows.push_back({{"force_N", f},
+                    {"seconds", seconds[queries / 2]},
+                    {"contact_displacement_mm", 1e3 * r.contact_displacement.norm()},
+                    {"force_in_range", r.force_in_range},
+                    {"on_trained_contact", r.on_trained_contact}});
+  }
+  return rows;
+}
 
 ReproducePlan load_reproduce_plan(const std::string& file) {
   const json doc = read_json_file(file);
@@ -215,6 +302,18 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
   const core::JsonReader timing = root.object("timing");
   plan.timing.config = resolve_case(timing, "config", file);
   plan.timing.steps = timing.integer("steps", 1, 100, 1);
+  if (timing.has("surrogate")) {
+    plan.timing.surrogate_config = resolve_case(timing, "surrogate", file);
+    const core::Case trained = core::load_case(plan.timing.surrogate_config);
+    const core::Case stressed = core::load_case(plan.timing.config);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& p : trained.surrogate.contact_points)
+      nearest = std::min(nearest, (p - stressed.load.point).norm());
+    if (!(nearest <= trained.surrogate.patch_radius))
+      timing.fail("surrogate", fmt::format("a case whose /surrogate/contact_points include the timing case's load "
+                                           "point (the nearest is {:.3g} mm away; the patch radius is {:.3g} mm)",
+                                           1e3 * nearest, 1e3 * trained.surrogate.patch_radius));
+  }
   const json& forces = timing.array("forces_N", 1, "a non-empty array of force magnitudes in (0, 100] N");
   for (std::size_t i = 0; i < forces.size(); ++i) {
     if (!forces[i].is_number() || !(forces[i].get<double>() > 0.0) || forces[i].get<double>() > 100.0)
@@ -245,8 +344,9 @@ int run_reproduce(const ReproduceOptions& options) {
   for (double f : plan.timing.forces) case_at_force(timing_case, f, plan.timing.steps);
 
   const int n_forces = static_cast<int>(plan.timing.forces.size());
+  const bool with_surrogate = !plan.timing.surrogate_config.empty();
   Progress progress("reproduce", (options.table1 ? static_cast<int>(plan.table1.size()) : 0) +
-                                     (options.timing ? 2 + 2 * n_forces : 0) + 1);
+                                     (options.timing ? 2 + 2 * n_forces + 2 * with_surrogate : 0) + 1);
   core::OutputDirectory out(options.out_dir);
   write_text_file(out.file("plan.json").string(), read_json_file(options.plan).dump(2) + "\n");
 
@@ -274,11 +374,17 @@ int run_reproduce(const ReproduceOptions& options) {
     json timing = {{"config", plan.timing.config},
                    {"steps", plan.timing.steps},
                    {"geometry_seconds", progress.elapsed_seconds() - t0},
-                   {"surrogate",
-                    {{"status", "not measured: `tissue reproduce` has no surrogate query yet (docs/EXPERIMENTS.md)"}}},
+                   {"surrogate", {{"status", "not measured: the plan's /timing has no surrogate case"}}},
                    {"rows", json::array()}};
     for (double f : plan.timing.forces)
       timing["rows"].push_back(time_one_force(case_at_force(timing_case, f, plan.timing.steps), g, f, &progress));
+    if (with_surrogate) {
+      try {
+        timing["surrogate"] = time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces, &progress);
+      } catch (const std::exception& e) {  // recorded like a failed model run; the rest of the timing stands
+        timing["surrogate"] = {{"status", std::string("failed: ") + e.what()}};
+      }
+    }
     progress.step("timing: tables and timing.png (scripts/plot_timing.py)");
     // The plot script reads timing.json; it is written again with the plot's outcome.
     write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");

@@ -7,11 +7,18 @@
 //   plan.json            the plan as run
 //   table1.md/.json      our RMSEs beside the paper's, with the reference's error bar
 //   <label>/             each Table 1 case's full `tissue compare` folder
-//   timing.md/.json      per force: the full meshless solve and the FEM reference
+//   timing.md/.json      per force: the full meshless solve, the FEM reference and the surrogate's query (when
+//                        the plan names a surrogate case: trained once, then queried)
 //   timing.png           the timing as grouped bars (scripts/plot_timing.py)
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace meshless {
+class Surrogate;
+}
 
 namespace experiments {
 
@@ -27,6 +34,9 @@ struct ReproducePlan {
     std::string config;          ///< the case whose load point is stressed, resolved to a path
     std::vector<double> forces;  ///< force magnitudes [N] along the case's force direction
     int steps = 1;               ///< time steps per deformation result (replaces /time/steps)
+    /// A case with a /surrogate block whose contact points include the load point (resolved to a path), or
+    /// empty: the surrogate is trained on it (as `tissue fit` does) and queried at each force.
+    std::string surrogate_config;
   };
   std::string file;
   std::vector<Table1Case> table1;
@@ -35,6 +45,13 @@ struct ReproducePlan {
 
 /// Read and check a plan; errors are core::CaseError naming the file and the JSON pointer.
 ReproducePlan load_reproduce_plan(const std::string& file);
+
+/// The Fig. 9 column of the surrogate: for each force magnitude (along `direction`, at `point` [m]), the median
+/// wall time of `queries` calls of surrogate.query [s] and its answer (contact displacement [mm], flags), one JSON
+/// row per force.
+nlohmann::json surrogate_query_timing(const meshless::Surrogate& surrogate, const Eigen::Vector3d& point,
+                                      const Eigen::Vector3d& direction, const std::vector<double>& forces,
+                                      int queries);
 
 struct ReproduceOptions {
   std::string plan = "configs/reproduce.json";

@@ -4,8 +4,9 @@
 Usage: plot_timing.py TIMING_JSON OUT_PNG
 
 TIMING_JSON is the timing.json of `tissue reproduce`: one row per force with, per model, the wall time of one
-deformation result (or the error that stopped it). Failed runs are drawn as missing bars. Needs Debian's
-python3-matplotlib (scripts/install_dependencies.sh).
+deformation result (or the error that stopped it), and the surrogate's query time per force when it was measured.
+Failed runs are drawn as missing bars. The time axis is logarithmic: a surrogate query takes microseconds, a full
+solve seconds. Needs Debian's python3-matplotlib (scripts/install_dependencies.sh).
 """
 import json
 import sys
@@ -15,7 +16,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-MODELS = [("meshless", "meshless, full solve (enrichment)", "tab:blue"), ("fem", "FEM reference", "black")]
+MODELS = [("meshless", "meshless, full solve (enrichment)", "tab:blue"), ("fem", "FEM reference", "black"),
+          ("surrogate", "surrogate query (Levenberg-Marquardt fit)", "tab:orange")]
 
 
 def main():
@@ -24,13 +26,19 @@ def main():
     with open(sys.argv[1]) as f:
         timing = json.load(f)
     rows = timing["rows"]
+    surrogate = timing.get("surrogate", {})
+    if surrogate.get("status") == "measured":
+        for r, s in zip(rows, surrogate["rows"]):
+            r["surrogate"] = s
+    models = [m for m in MODELS if any(m[0] in r for r in rows)]
     forces = [r["force_N"] for r in rows]
-    width = 0.8 / len(MODELS)
+    width = 0.8 / len(models)
     fig, ax = plt.subplots(figsize=(8, 4.5))
-    for k, (key, label, colour) in enumerate(MODELS):
-        xs = [i + (k - (len(MODELS) - 1) / 2) * width for i in range(len(rows))]
-        ys = [r[key].get("seconds", 0.0) for r in rows]
+    for k, (key, label, colour) in enumerate(models):
+        xs = [i + (k - (len(models) - 1) / 2) * width for i in range(len(rows))]
+        ys = [r.get(key, {}).get("seconds", 0.0) for r in rows]
         ax.bar(xs, ys, width, label=label, color=colour)
+    ax.set_yscale("log")
     ax.set_xticks(range(len(rows)))
     ax.set_xticklabels([f"{f:.2f}" for f in forces])
     ax.set_xlabel("force [N]")

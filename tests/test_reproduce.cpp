@@ -5,6 +5,10 @@
 #include <fstream>
 #include <string>
 
+#include <algorithm>
+#include <nlohmann/json.hpp>
+
+#include "core/case.hpp"
 #include "core/case_error.hpp"
 #include "experiments/reproduce.hpp"
 
@@ -53,6 +57,25 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
     EXPECT_GT(f, 0.0);
     EXPECT_LE(f, 4.0);
   }
+  // The surrogate column: a case trained at the stressed point, over the forces' range.
+  ASSERT_FALSE(plan.timing.surrogate_config.empty());
+  const core::Case trained = core::load_case(plan.timing.surrogate_config);
+  const core::Case stressed = core::load_case(plan.timing.config);
+  EXPECT_EQ((trained.surrogate.contact_points.at(0) - stressed.load.point).norm(), 0.0);
+  EXPECT_LE(*std::max_element(plan.timing.forces.begin(), plan.timing.forces.end()), trained.surrogate.max_force);
+}
+
+TEST(ReproducePlan, ASurrogateCaseTrainedElsewhereIsRefused) {
+  const std::string lung = std::filesystem::absolute(kConfigDir + "/lung_small.json").string();
+  // configs/lung_surrogate.json with its contact point moved 30 mm from lung_small's load point
+  nlohmann::json elsewhere = nlohmann::json::parse(std::ifstream(kConfigDir + "/lung_surrogate.json"));
+  elsewhere["surrogate"]["contact_points"] = {{-78.0, 30.0, 20.0}};
+  const std::string surrogate_case = write_plan("surrogate_case_elsewhere", elsewhere.dump());
+  std::string text = plan_text(lung, "[0.1]", "large");
+  text.insert(text.size() - 2, ", \"surrogate\": \"" + surrogate_case + "\"");  // inside /timing
+  const std::string error = error_of(write_plan("surrogate_elsewhere", text));
+  EXPECT_NE(error.find("/timing/surrogate"), std::string::npos) << error;
+  EXPECT_NE(error.find("contact_points include the timing case's load point"), std::string::npos) << error;
 }
 
 TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {

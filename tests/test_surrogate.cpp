@@ -17,6 +17,7 @@
 
 #include "meshless/box_mesh.hpp"
 #include "meshless/efg_model.hpp"
+#include "experiments/reproduce.hpp"
 #include "meshless/surrogate.hpp"
 #include "meshless/surrogate_box_case.hpp"
 #include "meshless/surrogate_builder.hpp"
@@ -225,6 +226,30 @@ const SurrogateData& synthetic_surrogate() {
     return d;
   }();
   return data;
+}
+
+// The Fig. 9 column of `tissue reproduce`: one row per force, each the answer of a direct query, a force beyond
+// the trained range flagged, and a time per query that is positive and far below a millisecond.
+TEST(SurrogateQuery, ReproduceTimesOneRowPerForceWithTheQuerysAnswer) {
+  const Surrogate s(synthetic_surrogate());
+  const core::SurrogateSpec spec = box_spec();
+  const Eigen::Vector3d point = spec.contact_points[0], direction = Eigen::Vector3d(1.0, 2.0, 2.0) / 3.0;
+  const std::vector<double> forces = {0.25 * spec.max_force, spec.max_force, 1.8 * spec.max_force};
+  const nlohmann::json rows = experiments::surrogate_query_timing(s, point, direction, forces, 101);
+  ASSERT_EQ(rows.size(), forces.size());
+  core::PointMatrix u(s.num_surface_nodes(), 3);
+  for (std::size_t i = 0; i < forces.size(); ++i) {
+    const SurrogateResponse direct = s.query(point, forces[i] * direction, &u);
+    EXPECT_DOUBLE_EQ(rows[i].at("force_N").get<double>(), forces[i]);
+    EXPECT_DOUBLE_EQ(rows[i].at("contact_displacement_mm").get<double>(), 1e3 * direct.contact_displacement.norm());
+    EXPECT_GT(rows[i].at("contact_displacement_mm").get<double>(), 0.0);
+    EXPECT_TRUE(rows[i].at("on_trained_contact").get<bool>());
+    EXPECT_GT(rows[i].at("seconds").get<double>(), 0.0);
+    EXPECT_LT(rows[i].at("seconds").get<double>(), 1e-3);
+  }
+  EXPECT_TRUE(rows[1].at("force_in_range").get<bool>());
+  EXPECT_FALSE(rows[2].at("force_in_range").get<bool>()) << "2 of 3 components beyond max_force are clamped";
+  EXPECT_THROW(experiments::surrogate_query_timing(s, point, direction, forces, 0), std::invalid_argument);
 }
 
 TEST(SurrogateFit, AnAnalyticFieldInTheBasisIsRecovered) {
