@@ -85,9 +85,9 @@ int run_fit(const FitArguments& a) {
   const core::Case c = core::load_case(a.config);
   const core::SurrogateSpec& spec = c.surrogate;
   if (c.cut)
-    std::cerr << "warning: " << a.config
-              << ": /cut is not modelled by the meshless solver yet; the surrogate is "
-                 "trained on the uncut body\n";
+    std::cerr << "note: " << a.config
+              << ": the surrogate is trained on the body cut by the whole of /cut (the incision is not advanced "
+                 "in steps)\n";
   const int solves = 3 * static_cast<int>(spec.contact_points.size()) * 2 * spec.force_levels;
   Progress progress("fit", 3 + solves + static_cast<int>(spec.contact_points.size()) + spec.holdout_forces);
   progress.step("building geometry and the node cloud (Gmsh)");
