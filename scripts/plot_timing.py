@@ -9,6 +9,7 @@ Failed runs are drawn as missing bars. The time axis is logarithmic: a surrogate
 solve seconds. Needs Debian's python3-matplotlib (scripts/install_dependencies.sh).
 """
 import json
+import os
 import sys
 
 import matplotlib
@@ -43,10 +44,10 @@ def main():
     ax.set_xticklabels([f"{f:.2f}" for f in forces])
     ax.set_xlabel("force [N]")
     ax.set_ylabel("time per deformation result [s]")
-    ax.set_title(f"{timing['config']}: {timing['steps']} time step(s) per result")
-    ax.legend()
+    ax.set_title(f"{os.path.basename(timing['config'])}: {timing['steps']} time step(s) per result")
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.14), ncol=len(models), frameon=False)
     fig.tight_layout()
-    fig.savefig(sys.argv[2], dpi=120)
+    fig.savefig(sys.argv[2], dpi=120, bbox_inches="tight")
 
 
 if __name__ == "__main__":
