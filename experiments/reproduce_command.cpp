@@ -12,10 +12,10 @@ void add_reproduce_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "reproduce",
       "Reproduce the paper's Table 1 (RMSE of the proposed and the baseline meshless cutting models against the FEM "
-      "reference, §5.4) and the analogue of its Fig. 9 (time per deformation result for 8 forces, §5.5) on the "
-      "cases of a plan file: table1.md/.json, timing.md/.json, timing.png and each case's compare folder "
+      "reference, §5.4) and the analogue of its Fig. 9 (time per deformation result for 8 forces, §5.5: the full meshless solve, the FEM "
+      "reference and the surrogate's query) on the cases of a plan file: table1.md/.json, timing.md/.json, timing.png and each case's compare folder "
       "(docs/EXPERIMENTS.md)");
-  cmd->add_option("--plan", options.plan, "Plan JSON: the Table 1 cases with the paper's figures, the timing case")
+  cmd->add_option("--plan", options.plan, "Plan JSON: the Table 1 cases with the paper's figures, the timing case, the surrogate's case")
       ->capture_default_str();
   cmd->add_option("--out", options.out_dir, "Output folder (written atomically)")->capture_default_str();
   cmd->add_flag("--no-plot", no_plot, "Do not draw radar.png and timing.png");
