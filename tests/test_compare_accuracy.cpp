@@ -56,6 +56,9 @@ void check_gate(const std::string& config) {
                   << " (scripts/install_dependencies.sh installs python3-matplotlib)";
   else
     EXPECT_TRUE(fs::exists(out / "radar.png"));
+  // An uncut case solves the meshless model once: the visibility variant is the enrichment's solve.
+  const bool has_cut = read_json(kConfigDir / config).contains("cut");
+  EXPECT_EQ(s["models"]["visibility"]["details"].value("solved_as", std::string()), has_cut ? "" : "enrichment");
   std::ifstream csv(out / "samples.csv");
   int lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
