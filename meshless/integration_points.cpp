@@ -8,7 +8,6 @@
 #include <cmath>
 #include <exception>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 #include <utility>
 
@@ -206,27 +205,11 @@ long long ShapeTable::num_entries() const {
 
 ShapeTable tabulate_shape_functions(const MlsShapeFunctions& mls, QuadraturePoints points, bool with_gradients,
                                     double spare_fraction) {
-  const int nq = points.size();
-  std::vector<int> all(nq);
-  std::iota(all.begin(), all.end(), 0);
-  const std::vector<MlsEvaluation> evals = evaluate_at(mls, points, all, with_gradients);
+  // An update of an empty table that evaluates every point: it packs them one after another, with the spare room.
   ShapeTable t;
   t.gradients = with_gradients;
-  t.row_begin.resize(nq);
-  t.row_end.resize(nq);
-  long long total = 0;
-  for (int q = 0; q < nq; ++q) total += evals[q].size();
-  allocate_slots(&t, with_spare(total, spare_fraction));
-  int at = 0;
-  for (int q = 0; q < nq; ++q) {
-    t.row_begin[q] = at;
-    at += evals[q].size();
-    t.row_end[q] = at;
-  }
-  t.slots_used = at;
-#pragma omp parallel for schedule(static)
-  for (int q = 0; q < nq; ++q) write_row(evals[q], t.row_begin[q], &t);
-  take_points(std::move(points), &t);
+  const std::vector<int> evaluate_all(points.size(), -1);
+  update_shape_functions(mls, std::move(points), evaluate_all, spare_fraction, &t);
   return t;
 }
 
