@@ -1,10 +1,12 @@
 // EFG model cost on box clouds of ~2k, 8k and 32k nodes (13^3, 20^3, 32^3; spacing 5 mm, d_max = 2, k = 6,
 // quadrature order 2 on 6 tets per grid cell): one full assembly of eqs. 20-24 (material update, residual and
 // tangent) and one elastic load step with each linear solver (docs/PERFORMANCE.md, docs/MESHLESS.md §2):
-//  * BM_EfgSolve: the automatic choice (UMFPACK when its estimated LU fits the available memory, else the
+//  * BM_EfgSolve: the automatic choice (the direct solver, MUMPS, when its estimated LU fits the available memory, else the
 //    AMG-preconditioned Krylov solve);
-//  * BM_EfgSolveAmgKrylov / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver forced, for the ratios
-//    within one run and the iterations against the cloud size;
+//  * BM_EfgSolveAmgKrylov / BM_EfgSolveMumps / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver
+//    forced, for the ratios within one run and the iterations against the cloud size;
+//  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
+//    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve;
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::amg_options
 //    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
@@ -12,11 +14,15 @@
 #include <benchmark/benchmark.h>
 #include <sys/resource.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
 #include <tuple>
 
 #include "benchmarks/mpi_benchmark_main.hpp"
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "meshless/efg_linear_solver.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
 
@@ -114,7 +120,49 @@ void time_solve(benchmark::State& state, const Variant& variant) {
 
 void BM_EfgSolve(benchmark::State& state) { time_solve(state, {}); }
 void BM_EfgSolveAmgKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::amg_krylov}); }
-void BM_EfgSolveUmfpack(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
+void BM_EfgSolveMumps(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
+void BM_EfgSolveUmfpack(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct_umfpack}); }
+
+/// configs/lung_small.json's EFG model at its shipped resolution, set up and assembled once (main() destroys it
+/// before MPI is finalised).
+std::unique_ptr<meshless::EfgModel>& lung_model() {
+  static std::unique_ptr<meshless::EfgModel> model;
+  return model;
+}
+meshless::EfgModel& assembled_lung_small() {
+  std::unique_ptr<meshless::EfgModel>& model = lung_model();
+  if (!model) {
+    const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json");
+    core::GeometryOptions options;
+    options.build_fem_mesh = false;
+    model = std::make_unique<meshless::EfgModel>(meshless::problem_from_case(c, core::build_geometry(c, options)));
+    model->setup_system();
+    model->assemble_system(true);  // the elastic tangent of the first step
+  }
+  return *model;
+}
+
+/// One factorisation (with its ordering) and one back-substitution of the lung tangent.
+void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind) {
+  meshless::EfgModel& model = assembled_lung_small();
+  meshless::EfgOptions options;
+  options.linear_solver = kind;
+  double solve_seconds = 0.0;
+  std::string label;
+  for (auto _ : state) {
+    meshless::EfgLinearSolver solver(options, model.sparsity(), model.nodes(), "lung_small");
+    solver.prepare(model.system_matrix());
+    const auto t0 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(solver.solve(Eigen::VectorXd::Ones(model.system_matrix().rows())));
+    solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    label = solver.description();
+  }
+  state.counters["nodes"] = model.statistics().num_nodes;
+  state.counters["nnz"] = static_cast<double>(model.statistics().matrix_nonzeros);
+  state.counters["back_substitution_s"] = solve_seconds;
+  state.counters["peak_rss_GB"] = peak_memory_gb();
+  state.SetLabel(label);
+}
 void BM_EfgSolveJacobiBicgstab(benchmark::State& state) { time_solve(state, {LinearSolverKind::jacobi_bicgstab}); }
 
 void BM_EfgPreconditioner(benchmark::State& state, const std::string& options, bool vci, double d_max,
@@ -132,7 +180,10 @@ BENCHMARK(BM_EfgAssembly)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->
 // choice (BM_EfgSolve/32) is the AMG-Krylov solve.
 BENCHMARK(BM_EfgSolve)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveAmgKrylov)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveMumps)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, umfpack, LinearSolverKind::direct_umfpack)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveJacobiBicgstab)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 // The preconditioner survey on the 2k-node cloud (right-preconditioned GMRES(200) unless stated).
@@ -161,5 +212,8 @@ BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", tru
     ->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 int main(int argc, char** argv) {
-  return bench::run_benchmarks_with_petsc(argc, argv, [] { cached_model().reset(); });
+  return bench::run_benchmarks_with_petsc(argc, argv, [] {
+    cached_model().reset();
+    lung_model().reset();
+  });
 }

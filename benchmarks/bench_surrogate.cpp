@@ -23,6 +23,7 @@
 #include <memory>
 #include <string>
 
+#include "benchmarks/mpi_benchmark_main.hpp"
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "meshless/efg_model.hpp"
@@ -183,4 +184,5 @@ BENCHMARK(BM_SurrogateTraining_box)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_SurrogateQuery_shipped)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_FullSolve_shipped)->Unit(benchmark::kSecond)->Iterations(1);
 
-BENCHMARK_MAIN();
+// MPI for the direct solver of the full solves (MUMPS, meshless/mumps_lu.hpp).
+int main(int argc, char** argv) { return bench::run_benchmarks_with_petsc(argc, argv); }

@@ -14,8 +14,8 @@
 namespace meshless {
 
 struct EfgLinearSolver::Umfpack {
-  // UMFPACK (multifrontal, BLAS-3 dense kernels): the EFG rows are dense (hundreds of couplings per
-  // row), where Eigen's SparseLU is an order of magnitude slower.
+  // UMFPACK (multifrontal with AMD ordering): the direct solver before MUMPS, kept for comparison (a third of
+  // MUMPS's speed on the lung, meshless/mumps_lu.hpp). Eigen's SparseLU is an order of magnitude slower still.
   Eigen::UmfPackLU<UmfpackMatrix> lu;
   /// umfpack_numeric's status. Eigen::UmfPackLU reports every non-zero status as NumericalIssue, but the
   /// determinant under/overflow warnings come with a valid factorisation (UMFPACK user guide), so only the
@@ -52,7 +52,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
                 : LinearSolverKind::amg_krylov;
   }
   switch (kind_) {
-    case LinearSolverKind::direct: umfpack_ = std::make_unique<Umfpack>(); break;
+    case LinearSolverKind::direct: mumps_ = std::make_unique<MumpsLu>(name_); break;
+    case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
     case LinearSolverKind::amg_krylov:
       if (!petsc_initialised())
         throw std::logic_error(fmt::format(
@@ -76,7 +77,8 @@ EfgLinearSolver::~EfgLinearSolver() = default;
 
 std::string EfgLinearSolver::description() const {
   switch (kind_) {
-    case LinearSolverKind::direct: return "UMFPACK (Eigen::UmfPackLU)";
+    case LinearSolverKind::direct: return "MUMPS sparse LU (METIS ordering)";
+    case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
     case LinearSolverKind::amg_krylov: return amg_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";
     case LinearSolverKind::automatic: break;
@@ -88,7 +90,8 @@ void EfgLinearSolver::prepare(const SparseMatrix& a) {
   prepared_ = false;
   const auto t0 = std::chrono::steady_clock::now();
   switch (kind_) {
-    case LinearSolverKind::direct: {
+    case LinearSolverKind::direct: mumps_->factorise(a); break;
+    case LinearSolverKind::direct_umfpack: {
       Umfpack& f = *umfpack_;
       f.colmajor = a;
       if (!f.analysed) {
@@ -124,7 +127,8 @@ Eigen::VectorXd EfgLinearSolver::solve(const Eigen::VectorXd& rhs) {
   Eigen::VectorXd x;
   last_iterations_ = 0;
   switch (kind_) {
-    case LinearSolverKind::direct: x = umfpack_->lu.solve(rhs); break;
+    case LinearSolverKind::direct: x = mumps_->solve(rhs); break;
+    case LinearSolverKind::direct_umfpack: x = umfpack_->lu.solve(rhs); break;
     case LinearSolverKind::amg_krylov:
       try {
         x = amg_->solve(rhs);

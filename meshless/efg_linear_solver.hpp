@@ -1,7 +1,7 @@
 #pragma once
 // The linear solves of the EFG model: (K_n + K^alpha_n) dU = -R of eq. 20, once per Newton iteration. The
-// model assembles the matrix; this class decides how to solve with it (options.linear_solver: UMFPACK's sparse
-// LU, a PETSc Krylov method preconditioned by algebraic multigrid, or Jacobi-BiCGSTAB), prepares it once per
+// model assembles the matrix; this class decides how to solve with it (options.linear_solver: MUMPS's sparse
+// LU (or UMFPACK's, kept for comparison), a PETSc Krylov method preconditioned by algebraic multigrid, or Jacobi-BiCGSTAB), prepares it once per
 // matrix (factorisation or preconditioner set-up) and then solves any number of right-hand sides with it (the
 // model's tangent reuse, docs/MESHLESS.md §2).
 #include <Eigen/Core>
@@ -10,6 +10,7 @@
 
 #include "meshless/amg_krylov_solver.hpp"
 #include "meshless/efg_problem.hpp"
+#include "meshless/mumps_lu.hpp"
 #include "meshless/nodal_sparsity.hpp"
 
 namespace meshless {
@@ -46,7 +47,7 @@ class EfgLinearSolver {
   int last_iterations() const { return last_iterations_; }
   /// Seconds of the last prepare() (factorisation, or multigrid set-up).
   double prepare_seconds() const { return prepare_seconds_; }
-  /// The method, for reports ("UMFPACK (Eigen::UmfPackLU)", "PETSc gmres + gamg (4 levels, ...)", ...).
+  /// The method, for reports ("MUMPS sparse LU (METIS ordering)", "PETSc gmres + gamg (4 levels, ...)", ...).
   std::string description() const;
   /// The estimate and the budget the automatic choice compared [bytes, flops]; 0 when the method was set
   /// explicitly.
@@ -65,6 +66,7 @@ class EfgLinearSolver {
   int last_iterations_ = 0;
   double prepare_seconds_ = 0.0;
   double peak_memory_estimate_ = 0.0, flops_estimate_ = 0.0, available_memory_ = 0.0;
+  std::unique_ptr<MumpsLu> mumps_;
   std::unique_ptr<Umfpack> umfpack_;
   std::unique_ptr<AmgKrylovSolver> amg_;
   std::unique_ptr<JacobiBicgstab> jacobi_;

@@ -161,6 +161,8 @@ class EfgModel {
   const CutWeights* cut_weights() const { return cut_weights_.get(); }
   /// The system matrix of the last assemble_system(true) (tangent + penalty, eq. 20).
   const SparseMatrix& system_matrix() const { return matrix_; }
+  /// Its node-pair pattern (after setup_system()).
+  const NodalSparsity& sparsity() const { return *sparsity_; }
   double alpha() const { return alpha_; }
   double residual_norm() const { return residual_.norm(); }
   /// Largest |sum_i int grad phi_i - oint phi_i n| over nodes before the VCI correction [m^2] (diagnostic).

@@ -1,6 +1,6 @@
 // EFG linear solvers: the automatic direct/iterative choice from the LU estimate and the available memory,
-// and the iterative solvers (AMG-preconditioned Krylov through PETSc, Jacobi-BiCGSTAB) reaching the same
-// equilibrium as the sparse LU, with the symmetric (k = 0) and the non-symmetric (k != 0) tangent.
+// the two sparse LUs (MUMPS, UMFPACK) and the iterative solvers (AMG-preconditioned Krylov through PETSc,
+// Jacobi-BiCGSTAB) reaching the same equilibrium, with the symmetric (k = 0) and the non-symmetric (k != 0) tangent.
 #include <deal.II/base/mpi.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,6 +13,7 @@
 #include "meshless/available_memory.hpp"
 #include "meshless/direct_solver_estimate.hpp"
 #include "meshless/efg_model.hpp"
+#include "meshless/mumps_lu.hpp"
 #include "meshless/verification_problems.hpp"
 
 namespace meshless {
@@ -47,7 +48,7 @@ TEST(EfgLinearSolvers, AutomaticChoiceFactorisesSmallCloudsAndReportsTheEstimate
   std::cout << "LU estimates (AMD, blocked): 5^3 nodes " << small.direct_peak_memory_estimate / 1e6 << " MB, "
             << small.direct_flops_estimate / 1e6 << " Mflop; 8^3 nodes " << larger.direct_peak_memory_estimate / 1e6
             << " MB, " << larger.direct_flops_estimate / 1e6 << " Mflop\n";
-  EXPECT_EQ(small.linear_solver.rfind("UMFPACK", 0), 0u);
+  EXPECT_EQ(small.linear_solver.rfind("MUMPS", 0), 0u);
   // The peak memory is at least the matrix (8-byte values + 4-byte indices) and grows with the cloud.
   EXPECT_GT(small.direct_peak_memory_estimate, 12.0 * small.matrix_nonzeros);
   EXPECT_GT(larger.direct_peak_memory_estimate, small.direct_peak_memory_estimate);
@@ -100,7 +101,7 @@ TEST(EfgLinearSolvers, MemoryTextsAreParsed) {
   EXPECT_FALSE(cgroup_headroom("", "1\n", physical).has_value());
 }
 
-/// Each iterative solver against UMFPACK on the 6^3 box, k = 0 (one elastic step) and k = 2 (a non-symmetric
+/// Each iterative solver against the direct solver (MUMPS) on the 6^3 box, k = 0 (one elastic step) and k = 2 (a non-symmetric
 /// tangent that changes with the strain: an elastic step and two creep steps, several Newton iterations each).
 void expect_iterative_matches_direct(LinearSolverKind solver, const std::string& label, double k, int steps,
                                      double tolerance) {
@@ -110,7 +111,7 @@ void expect_iterative_matches_direct(LinearSolverKind solver, const std::string&
   const Eigen::VectorXd iterative = solve_sheared_box(6, solver, &stats, k, steps, &iterations);
   const double difference = (iterative - direct).norm() / direct.norm();
   std::cout << "6^3 sheared box, k = " << k << ": |U| = " << direct.norm() * 1e3 << " mm; " << stats.linear_solver
-            << ": " << iterations << " Krylov iterations, relative difference to UMFPACK " << difference << "\n";
+            << ": " << iterations << " Krylov iterations, relative difference to the LU " << difference << "\n";
   EXPECT_EQ(stats.linear_solver.rfind(label, 0), 0u) << stats.linear_solver;
   EXPECT_GT(direct.norm(), 1e-4);
   EXPECT_GT(iterations, 0);
@@ -127,6 +128,70 @@ TEST(EfgLinearSolvers, AmgKrylovReachesTheDirectSolutionWithNonzeroK) {
 
 TEST(EfgLinearSolvers, JacobiBicgstabReachesTheDirectSolution) {
   expect_iterative_matches_direct(LinearSolverKind::jacobi_bicgstab, "BiCGSTAB", 0.0, 1, 1e-8);
+}
+
+TEST(EfgLinearSolvers, MumpsAndUmfpackReachTheSameEquilibriumWithNonzeroK) {
+  // Both factorise exactly; the non-symmetric k = 2 tangent over an elastic and two creep steps (several Newton
+  // iterations each, factorisations reused and refreshed) must end at the same parameters to round-off.
+  EfgStatistics mumps, umfpack;
+  const Eigen::VectorXd a = solve_sheared_box(6, LinearSolverKind::direct, &mumps, 2.0, 3);
+  const Eigen::VectorXd b = solve_sheared_box(6, LinearSolverKind::direct_umfpack, &umfpack, 2.0, 3);
+  const double difference = (a - b).norm() / b.norm();
+  std::cout << "6^3 sheared box, k = 2: " << mumps.linear_solver << " against " << umfpack.linear_solver
+            << ": relative difference " << difference << "\n";
+  EXPECT_EQ(mumps.linear_solver.rfind("MUMPS", 0), 0u);
+  EXPECT_EQ(umfpack.linear_solver.rfind("UMFPACK", 0), 0u);
+  EXPECT_GT(b.norm(), 1e-4);
+  EXPECT_LT(difference, 1e-12);
+}
+
+/// A 4 x 4 non-symmetric system with a known solution, as the model's row-major matrix.
+SparseMatrix small_unsymmetric_matrix() {
+  Eigen::MatrixXd dense(4, 4);
+  dense << 4, 1, 0, 0,  //
+      2, 5, 1, 0,       //
+      0, 3, 6, 1,       //
+      1, 0, 2, 7;
+  return dense.sparseView();
+}
+
+TEST(MumpsLu, SolvesAnUnsymmetricSystemAndReusesItsAnalysis) {
+  MumpsLu lu("4x4");
+  SparseMatrix a = small_unsymmetric_matrix();
+  const Eigen::Vector4d x(1.0, -2.0, 3.0, 0.5);
+  lu.factorise(a);
+  EXPECT_LT((lu.solve(a * x) - x).norm(), 1e-14);
+  EXPECT_GT(lu.factor_entries(), 0.0);
+  // New values on the same pattern: the analysis is reused, the factors are new.
+  a.coeffRef(2, 1) = -3.0;
+  lu.factorise(a);
+  EXPECT_LT((lu.solve(a * x) - x).norm(), 1e-14);
+  // A matrix with spare room per row (uncompressed, as a cut body's) gives the same answer.
+  SparseMatrix spare = a;
+  spare.reserve(Eigen::VectorXi::Constant(4, 6));
+  ASSERT_FALSE(spare.isCompressed());
+  lu.factorise(spare);
+  EXPECT_LT((lu.solve(a * x) - x).norm(), 1e-14);
+}
+
+TEST(MumpsLu, SaysWhyItFails) {
+  Eigen::MatrixXd dense(3, 3);
+  dense << 1, 2, 3,  //
+      2, 4, 6,       //
+      1, 0, 1;       // row 2 = 2 x row 1: numerically singular
+  MumpsLu lu("singular");
+  try {
+    lu.factorise(dense.sparseView());
+    FAIL() << "a singular matrix was factorised";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("'singular'"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("singular"), std::string::npos) << e.what();
+  }
+  MumpsLu analysed("pattern");
+  analysed.factorise(small_unsymmetric_matrix());
+  SparseMatrix other = small_unsymmetric_matrix();
+  other.coeffRef(0, 3) = 1.0;  // one entry more: a new pattern needs a new solver
+  EXPECT_THROW(analysed.factorise(other), std::invalid_argument);
 }
 
 /// The node-pair pattern of a 27-point stencil on an n^3 grid, and the same pattern expanded to 3 x 3 blocks.
@@ -174,7 +239,7 @@ TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
 }  // namespace meshless
 
 int main(int argc, char** argv) {
-  // The AMG-Krylov solver runs on PETSc, which needs MPI and PETSc initialised; only the program name is
+  // The AMG-Krylov solver runs on PETSc and the direct solver on MUMPS, which need MPI and PETSc initialised; only the program name is
   // passed on, so that PETSc does not read GoogleTest's flags.
   int petsc_argc = 1;
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
