@@ -1,5 +1,7 @@
 #include "experiments/verify_commands.hpp"
 
+#include "experiments/mesh_study_estimate.hpp"
+
 #include <fmt/format.h>
 
 #include <cmath>
@@ -178,31 +180,11 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
   // Richardson on the last three levels (norms of the differences of all sample displacements).
   nlohmann::json richardson;
   if (all_solved && u.size() >= 3) {
-    const std::size_t n = u.size();
-    const double d1 = (u[n - 2] - u[n - 3]).norm(), d2 = (u[n - 1] - u[n - 2]).norm();
-    const double ratio = 0.5 * (levels[n - 3].h_mm / levels[n - 2].h_mm + levels[n - 2].h_mm / levels[n - 1].h_mm);
-    if (d2 > 0 && d1 > d2) {
-      const double p = std::log(d1 / d2) / std::log(ratio);
-      const double error = d2 / (std::pow(ratio, p) - 1.0);
-      richardson = {{"observed_order", p}, {"estimated_error_of_finest_relative", error / u[n - 1].norm()}};
-      *md += fmt::format("\nRichardson (last three levels): observed order {:.2f}, estimated remaining error of the "
-                         "finest level {:.2f} % of the sample displacements.\n",
-                         p, 100 * error / u[n - 1].norm());
-    } else if (d2 > 0) {
-      // Not in the asymptotic range yet: bound the remaining error as if the convergence were only first
-      // order (the lowest order a consistent discretisation has), which overestimates it when p > 1.
-      const double error = d2 / (ratio - 1.0);
-      richardson = {{"note", "differences not decreasing: no asymptotic estimate; order 1 assumed for a bound"},
-                    {"assumed_order", 1.0},
-                    {"estimated_error_of_finest_relative", error / u[n - 1].norm()}};
-      *md += fmt::format("\nRichardson: the differences do not decrease (not yet asymptotic). Assuming first-order "
-                         "convergence, the remaining error of the finest level is at most about {:.2f} % of the "
-                         "sample displacements.\n",
-                         100 * error / u[n - 1].norm());
-    } else {
-      richardson = {{"note", "the last two levels agree exactly"}};
-      *md += "\nRichardson: the last two levels agree exactly.\n";
-    }
+    std::vector<double> h_mm;
+    for (const auto& level : levels) h_mm.push_back(level.h_mm);
+    const MeshStudyEstimate estimate = estimate_remaining_error(u, h_mm);
+    richardson = estimate.json;
+    *md += "\n" + estimate.sentence + "\n";
   }
   *md += converged.is_null()
              ? fmt::format("Not converged to {:.0f} % within these levels.\n\n", opt.converged_change * 100)

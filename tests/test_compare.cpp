@@ -16,9 +16,12 @@
 #include "experiments/compare.hpp"
 #include "experiments/compare_metrics.hpp"
 #include "experiments/compare_subprocess.hpp"
+#include "experiments/mesh_study_estimate.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
+using experiments::estimate_remaining_error;
+using experiments::MeshStudyEstimate;
 
 namespace {
 
@@ -151,6 +154,50 @@ experiments::Comparison synthetic_comparison(bool identical_variants) {
   c.geometry_seconds = 2.0;
   c.has_cut = true;
   return c;
+}
+
+/// Three levels of a study whose samples converge exactly as u(h) = u* + c h^p (ratio 1.5 between levels).
+std::vector<Eigen::MatrixXd> converging_levels(double order) {
+  Eigen::MatrixXd exact(2, 3), c(2, 3);
+  exact << 1.0, 2.0, 3.0, -1.0, 0.5, 2.0;
+  c << 0.3, -0.2, 0.1, 0.05, 0.2, -0.1;
+  std::vector<Eigen::MatrixXd> u;
+  for (double h : {0.27, 0.18, 0.12}) u.push_back(exact + std::pow(h, order) * c);
+  return u;
+}
+
+TEST(MeshStudyEstimate, RichardsonRecoversTheExactErrorAtOrderOneOrMore) {
+  for (double order : {1.0, 2.0}) {
+    const std::vector<Eigen::MatrixXd> u = converging_levels(order);
+    Eigen::MatrixXd exact(2, 3);
+    exact << 1.0, 2.0, 3.0, -1.0, 0.5, 2.0;
+    const double true_error = (u[2] - exact).norm() / u[2].norm();
+    const MeshStudyEstimate e = estimate_remaining_error(u, {27, 18, 12});
+    ASSERT_TRUE(e.json.contains("observed_order")) << e.json.dump();
+    EXPECT_NEAR(e.json["observed_order"].get<double>(), order, 1e-9);
+    EXPECT_NEAR(e.json["estimated_error_of_finest_relative"].get<double>(), true_error, 1e-9 * true_error);
+  }
+}
+
+TEST(MeshStudyEstimate, AnOrderBelowOneOrGrowingDifferencesGiveTheFirstOrderBound) {
+  // Order 0.2 (a coarse level not yet asymptotic): extrapolating with it would give 6x the first-order bound.
+  const std::vector<Eigen::MatrixXd> slow = converging_levels(0.2);
+  const MeshStudyEstimate e = estimate_remaining_error(slow, {27, 18, 12});
+  const double d2 = (slow[2] - slow[1]).norm() / slow[2].norm();
+  EXPECT_FALSE(e.json.contains("observed_order"));
+  EXPECT_NEAR(e.json["observed_order_not_used"].get<double>(), 0.2, 1e-9);
+  EXPECT_EQ(e.json["assumed_order"].get<double>(), 1.0);
+  EXPECT_NEAR(e.json["estimated_error_of_finest_relative"].get<double>(), d2 / 0.5, 1e-12);
+  EXPECT_NE(e.sentence.find("observed order 0.20 below 1"), std::string::npos) << e.sentence;
+  // Differences that grow: the same bound, no order.
+  std::vector<Eigen::MatrixXd> growing = {slow[0], slow[0] + 0.01 * slow[0], slow[0] + 0.05 * slow[0]};
+  const MeshStudyEstimate g = estimate_remaining_error(growing, {27, 18, 12});
+  EXPECT_FALSE(g.json.contains("observed_order_not_used"));
+  EXPECT_NE(g.json["note"].get<std::string>().find("differences not decreasing"), std::string::npos);
+  // Two equal finest levels, and too few levels.
+  EXPECT_EQ(estimate_remaining_error({slow[0], slow[1], slow[1]}, {27, 18, 12}).json["note"],
+            "the last two levels agree exactly");
+  EXPECT_TRUE(estimate_remaining_error({slow[0], slow[1]}, {27, 18}).json.is_null());
 }
 
 TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {
