@@ -5,6 +5,7 @@
 #include <mpi.h>
 
 #include <cstring>
+#include <mutex>
 #include <stdexcept>
 #include <vector>
 
@@ -20,6 +21,14 @@ MUMPS_INT infog(const DMUMPS_STRUC_C& id, int i) { return id.infog[i - 1]; }
 constexpr MUMPS_INT kJobInit = -1, kJobEnd = -2, kJobAnalyse = 1, kJobFactorise = 2, kJobSolve = 3;
 constexpr MUMPS_INT kOrderingMetis = 5;  // ICNTL(7)
 constexpr int kMaxWorkspaceRetries = 4;
+
+/// MUMPS keeps Fortran module state during a call (its load balancing's allocations), so two instances called
+/// at once from two threads corrupt each other (the surrogate's parallel training did: "PB allocation in
+/// DMUMPS_LOAD_INIT", then a crash). Every call of every instance takes this lock.
+std::mutex& mumps_call_lock() {
+  static std::mutex lock;
+  return lock;
+}
 
 /// INFOG(1) codes that mean the workspace estimated by the analysis was too small (MUMPS user guide §8): the
 /// factorisation is retried with a larger relaxation, ICNTL(14).
@@ -58,10 +67,10 @@ struct MumpsLu::Mumps {
     int finalized = 0;
     MPI_Finalized(&finalized);
     if (!initialised || finalized) return;  // MUMPS may not be called after MPI_Finalize: leak rather than abort
-    id.job = kJobEnd;
-    dmumps_c(&id);
+    run(kJobEnd);
   }
   void run(MUMPS_INT job) {
+    const std::lock_guard<std::mutex> hold(mumps_call_lock());
     id.job = job;
     dmumps_c(&id);
   }

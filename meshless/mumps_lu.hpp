@@ -9,8 +9,9 @@
 // bench_efg's BM_EfgDirectLung).
 //
 // Lifetime: nothing passed in is referenced after a call returns (the matrix is copied into MUMPS's coordinate
-// arrays). Thread safety: none; one instance per model, used from one thread (MUMPS's own BLAS threads are
-// internal). MPI must be initialised before construction (every tissue program and MPI test main does, through
+// arrays). Thread safety: an instance is used from one thread at a time. Instances in different threads (the
+// surrogate's parallel training) are safe but take turns: MUMPS keeps Fortran module state during a call, so every
+// MUMPS call in the process holds one lock. Each factorisation uses all cores through the BLAS anyway. MPI must be initialised before construction (every tissue program and MPI test main does, through
 // dealii::Utilities::MPI::MPI_InitFinalize): MUMPS runs on MPI_COMM_SELF.
 #include <Eigen/Core>
 #include <memory>
