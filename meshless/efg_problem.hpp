@@ -24,7 +24,7 @@ using LipTraction = std::function<Eigen::Vector3d(const Eigen::Vector3d& x, cons
 enum class LinearSolverKind {
   automatic,        ///< direct when the estimated peak memory of the LU fits the available memory, else amg_krylov
   direct,           ///< MUMPS sparse LU (meshless/mumps_lu.hpp); works for the non-symmetric tangent; needs MPI initialised
-  direct_umfpack,   ///< UMFPACK sparse LU, the earlier direct solver (kept for comparison: about 3x slower on the lung)
+  direct_umfpack,   ///< UMFPACK sparse LU, the earlier direct solver (kept for comparison: 1.7x slower on the lung)
   amg_krylov,       ///< PETSc Krylov method + algebraic multigrid (EfgOptions::amg_options); needs PETSc initialised
   jacobi_bicgstab,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (the earlier fallback, kept for comparison)
 };
