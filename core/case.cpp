@@ -121,11 +121,12 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
   m.front_transition = fem_mesh_size * MeshlessSpec::kFrontTransitionPerSpacing;
   if (!r) return m;
   m.node_spacing = r->in_range("node_spacing", 0.5, 200.0, true, true, fem_mesh_size / kMm) * kMm;
-  m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, 2.0);
-  m.support_neighbours = r->integer("support_neighbours", 4, 100, 6);
-  m.quadrature_order = r->integer("quadrature_order", 1, 8, 2);
-  m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, 1e3);
-  m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, std::string("enrichment"));
+  const MeshlessSpec defaults;  // the defaults are stated once, in core/case.hpp
+  m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, defaults.support_factor);
+  m.support_neighbours = r->integer("support_neighbours", 4, 100, defaults.support_neighbours);
+  m.quadrature_order = r->integer("quadrature_order", 1, 8, defaults.quadrature_order);
+  m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, defaults.penalty_factor);
+  m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, defaults.enrichment);
   m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true,
                                    m.node_spacing * MeshlessSpec::kFrontTransitionPerSpacing / kMm) *
                        kMm;
@@ -136,9 +137,9 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
 FemSpec read_fem(const std::optional<JsonReader>& r) {
   FemSpec f;
   if (!r) return f;
-  f.degree = r->integer("degree", 1, 2, 2);
-  f.newton_tolerance = r->in_range("newton_tolerance", 0.0, 1e-2, false, true, 1e-8);
-  f.max_newton_iterations = r->integer("max_newton_iterations", 1, 200, 25);
+  f.degree = r->integer("degree", 1, 2, f.degree);  // f holds the defaults of core/case.hpp
+  f.newton_tolerance = r->in_range("newton_tolerance", 0.0, 1e-2, false, true, f.newton_tolerance);
+  f.max_newton_iterations = r->integer("max_newton_iterations", 1, 200, f.max_newton_iterations);
   f.linear_solver = r->choice("linear_solver", {"amg", "direct"}, f.linear_solver);
   r->finish();
   return f;
@@ -147,8 +148,8 @@ FemSpec read_fem(const std::optional<JsonReader>& r) {
 OutputSpec read_output(const std::optional<JsonReader>& r) {
   OutputSpec o;
   if (!r) return o;
-  o.vtu = r->boolean("vtu", true);
-  o.every = r->integer("every", 1, 1000000, 1);
+  o.vtu = r->boolean("vtu", o.vtu);  // o holds the defaults of core/case.hpp
+  o.every = r->integer("every", 1, 1000000, o.every);
   r->finish();
   return o;
 }

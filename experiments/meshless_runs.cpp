@@ -14,6 +14,7 @@
 #include "experiments/vtu_writer.hpp"
 #include "meshless/cut_quadrature.hpp"
 #include "meshless/efg_model.hpp"
+#include "meshless/mls_shape_functions.hpp"
 #include "meshless/verification_problems.hpp"
 
 namespace experiments {
@@ -61,6 +62,16 @@ void write_lips_vtu(const std::string& path, const meshless::EfgModel& model) {
   write_triangle_vtu(path, points, triangles, {{"displacement", displacement}}, {{"lip", lip}});
 }
 
+/// `e` with what to change in the case: a point covered by too few nodes (on its side of a cut, where the
+/// enrichment or visibility removes the other side's) is a property of the cloud and the support, not a bug.
+std::runtime_error with_support_hint(const meshless::SingularMomentMatrix& e, const core::Case& c) {
+  return std::runtime_error(fmt::format(
+      "{}. The node cloud does not determine the MLS approximation there{}. To cover every point with enough "
+      "nodes: raise /meshless/support_factor (now {}; 2 couples each node to about 2.4x as many) or lower "
+      "/meshless/node_spacing (now {} mm) (docs/MESHLESS.md §2, \"Support size\")",
+      e.what(), c.cut ? ", on its side of the cut" : "", c.meshless.support_factor, c.meshless.node_spacing * 1e3));
+}
+
 }  // namespace
 
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
@@ -74,7 +85,11 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   auto cut_after = [&](int k) { return full_cut->truncated(full_cut->trace_length() * k / increments); };
   if (increments > 1) problem.cut = cut_after(1);
   meshless::EfgModel model(std::move(problem), options);
-  model.setup_system();
+  try {
+    model.setup_system();
+  } catch (const meshless::SingularMomentMatrix& e) {
+    throw with_support_hint(e, c);
+  }
   const meshless::EfgStatistics& st = model.statistics();
   if (on_step)
     on_step(fmt::format("EFG set up: {} nodes, {} cells, {} volume points ({:.1f} nodes each), alpha = {:.4g} Pa/m, "
@@ -89,7 +104,12 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   for (int step = 1; step <= n_steps; ++step) {
     const auto t0 = std::chrono::steady_clock::now();
     if (step > 1 && step <= increments) {
-      const meshless::CutUpdate u = model.advance_cut(cut_after(step));  // paper §4: a local update
+      meshless::CutUpdate u;
+      try {
+        u = model.advance_cut(cut_after(step));  // paper §4: a local update
+      } catch (const meshless::SingularMomentMatrix& e) {
+        throw with_support_hint(e, c);
+      }
       cut_updates.push_back({{"step", step},
                              {"cut_length_mm", model.problem().cut->trace_length() * 1e3},
                              {"volume_points_recomputed", u.volume_points_recomputed},
@@ -233,7 +253,8 @@ int run_verify_meshless(const std::string& out_dir, bool quick) {
   }
   const double rate_l2 = meshless::convergence_rate(h, l2), rate_en = meshless::convergence_rate(h, en);
   j["cantilever"] = {{"runs", cant}, {"rate_l2", rate_l2}, {"rate_energy", rate_en}};
-  md += fmt::format("\nFitted rates: L2 {:.2f}, energy {:.2f} (required ≥ 0.9).\n\n", rate_l2, rate_en);
+  md += fmt::format("\nFitted rates: L2 {:.2f}, energy {:.2f} (required ≥ {} and ≥ {}).\n\n", rate_l2, rate_en,
+                    meshless::kCantileverMinRateL2, meshless::kCantileverMinRateEnergy);
 
   progress.step("creep bar under a step load");
   const meshless::CreepReport cr = meshless::run_creep_bar(40);
@@ -296,7 +317,8 @@ int run_verify_meshless(const std::string& out_dir, bool quick) {
   out.commit();
   progress.done();
   std::cout << md;
-  const bool ok = rate_l2 >= 0.9 && rate_en >= 0.9 && cr.max_relative_error < 0.01;
+  const bool ok = rate_l2 >= meshless::kCantileverMinRateL2 && rate_en >= meshless::kCantileverMinRateEnergy &&
+                  cr.max_relative_error < 0.01;
   return ok ? 0 : 1;
 }
 

@@ -133,7 +133,7 @@ PatchTestReport run_patch_test(int quadrature_order, bool variationally_consiste
   return r;
 }
 
-CantileverReport run_cantilever(int nd, int quadrature_order, bool variationally_consistent) {
+CantileverReport run_cantilever(int nd, int quadrature_order, bool variationally_consistent, double d_max) {
   const double L = 0.1, D = 0.02, T = 0.02, P = 1e-3;
   const double h = D / nd;
   auto tagger = [L](const Eigen::Vector3d& c, const Eigen::Vector3d&) {
@@ -144,6 +144,7 @@ CantileverReport run_cantilever(int nd, int quadrature_order, bool variationally
   core::TetMesh mesh = make_box_mesh(Eigen::Vector3d(0.0, -D / 2, -T / 2), Eigen::Vector3d(L, D / 2, T / 2), 5 * nd,
                                      nd, nd, tagger);
   EfgProblem p = box_problem("cantilever", std::move(mesh), h, quadrature_order, 0.0);
+  p.support.d_max = d_max;
   const double E = p.material.K1, nu = p.material.nu, I = T * D * D * D / 12.0;
   // Timoshenko & Goodier: clamped at x = 0, shear P at x = L (exact 3-D elasticity for nu = 0).
   auto exact_u = [=](const Eigen::Vector3d& x) -> Eigen::Vector3d {

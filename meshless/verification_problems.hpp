@@ -43,8 +43,14 @@ struct CantileverReport {
   double seconds = 0.0;
 };
 /// Beam L = 100 mm, height D = 20 mm, thickness 20 mm, clamped at x = 0 by penalty to the exact displacement,
-/// parabolic shear P at x = L; K1 = 6000 Pa, nu = 0, elastic step (k = 0, dt = 0).
-CantileverReport run_cantilever(int cells_through_height, int quadrature_order = 3, bool variationally_consistent = true);
+/// parabolic shear P at x = L; K1 = 6000 Pa, nu = 0, elastic step (k = 0, dt = 0). `d_max`: the support's
+/// dilation factor (SupportRadiiParams::d_max; the lung cases ship core::MeshlessSpec's default).
+CantileverReport run_cantilever(int cells_through_height, int quadrature_order = 3, bool variationally_consistent = true,
+                                double d_max = 2.0);
+/// The rates the cantilever must reach over 2, 3, 4 (and 6) cells through the height with the default support
+/// (`tissue verify meshless`, test_efg_cantilever). A linear basis converges at 2 (L2) and 1 (energy); measured
+/// over 2-6 cells: 1.96 and 1.42. The bounds sit just under that, so a lost order fails.
+constexpr double kCantileverMinRateL2 = 1.8, kCantileverMinRateEnergy = 1.3;
 
 /// The scaling problem of the benchmarks and the linear-solver tests: a cube of `points_per_side`^3 nodes at
 /// `spacing` [m] (cells jittered by 0.2, 6 tets per cell), clamped by penalty on z = 0 and sheared by a 10 Pa
