@@ -153,19 +153,42 @@ void tag_regions(const Case& c, const Eigen::Vector3d& load_centre, const Eigen:
 
 /// Deterministic sample points (paper §5.4): a sunflower spiral in the tangent plane at the load
 /// centre, projected onto the reference surface.
+/// `spec.count` surface points spread evenly over the disc of radius `spec.radius` around the load centre, in
+/// its tangent plane (a sunflower spiral: equal area per point), then snapped to the surface. The annulus
+/// within `band` of the load-patch circle (radius `load_radius`) is left out of the disc, and a point that lands
+/// in the band after snapping (the surface curves) is moved radially until it leaves it.
 PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spec, const Eigen::Vector3d& centre,
-                           const Eigen::Vector3d& normal) {
+                           const Eigen::Vector3d& normal, double load_radius, double band) {
   Eigen::Vector3d helper = Eigen::Vector3d::UnitX();
   if (std::abs(normal.x()) > 0.9) helper = Eigen::Vector3d::UnitY();
   const Eigen::Vector3d t1 = normal.cross(helper).normalized();
   const Eigen::Vector3d t2 = normal.cross(t1);
   const double golden_angle = M_PI * (3.0 - std::sqrt(5.0));
+  // The disc without the annulus [inner, outer]: equal area per point over [0, inner] and [outer, R].
+  const double R = spec.radius;
+  const double inner = std::clamp(load_radius - band, 0.0, R), outer = std::clamp(load_radius + band, inner, R);
+  const double inner_area = inner * inner, area = inner_area + R * R - outer * outer;  // over pi
+  auto radius_at = [&](double fraction) {                                             // fraction of the area
+    const double a = fraction * area;
+    return a <= inner_area ? std::sqrt(a) : std::sqrt(a - inner_area + outer * outer);
+  };
+  auto snap = [&](double r, double theta) -> Eigen::Vector3d {
+    return surface.closest_point(centre + r * (std::cos(theta) * t1 + std::sin(theta) * t2)).point;
+  };
   PointMatrix samples(spec.count, 3);
   for (int i = 0; i < spec.count; ++i) {
-    const double r = spec.radius * std::sqrt((i + 0.5) / spec.count);
     const double theta = i * golden_angle;
-    const Eigen::Vector3d q = centre + r * (std::cos(theta) * t1 + std::sin(theta) * t2);
-    samples.row(i) = surface.closest_point(q).point.transpose();
+    double r = area > 0.0 ? radius_at((i + 0.5) / spec.count) : R * std::sqrt((i + 0.5) / spec.count);
+    Eigen::Vector3d x = snap(r, theta);
+    // The band is measured as compare measures it: | |x - centre| - load_radius | in 3-D.
+    for (int attempt = 0; attempt < 8; ++attempt) {
+      const double d = (x - centre).norm();
+      if (std::abs(d - load_radius) >= band) break;
+      const double target = r < load_radius ? load_radius - 1.05 * band : load_radius + 1.05 * band;
+      r = std::max(0.0, r + (target - d));
+      x = snap(r, theta);
+    }
+    samples.row(i) = x.transpose();
   }
   return samples;
 }
@@ -446,7 +469,8 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
     }
     check_cut_depth(c, g.surface, *g.cut);
   }
-  g.sample_points = choose_samples(g.surface, c.samples, g.load_centre, g.load_normal);
+  g.sample_points = choose_samples(g.surface, c.samples, g.load_centre, g.load_normal, c.load.radius,
+                                   kPatchEdgeBandPerLoadRadius * c.load.radius);
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);

@@ -375,7 +375,8 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   }
 
   progress.step("comparing at the samples and writing the results");
-  cmp.rules.patch_edge_distance = options.patch_edge_distance.value_or(0.25 * c.load.radius);
+  cmp.rules.patch_edge_distance =
+      options.patch_edge_distance.value_or(core::kPatchEdgeBandPerLoadRadius * c.load.radius);
   cmp.rules.cut_distance = options.cut_distance.value_or(c.meshless.node_spacing);
   cmp.diagnostics = diagnose_samples(g.sample_points, g.load_centre, c.load.radius, g.cut, cmp.rules);
   cmp.error_bar = lookup_error_bar(options.reference_error_file, c, cmp.reference.sample_displacements);

@@ -83,7 +83,14 @@ TEST(BuiltinLung, RegionsAreTaggedConsistently) {
     const Eigen::Vector3d p = g.sample_points.row(i);
     EXPECT_LT(g.surface.closest_point(p).distance, 1e-9);
     EXPECT_LE((p - g.load_centre).norm(), c.samples.radius * 1.2);
+    // Clear of the load-patch edge, where a point-wise comparison is ill-posed (core::kPatchEdgeBandPerLoadRadius).
+    EXPECT_GE(std::abs((p - g.load_centre).norm() - c.load.radius), core::kPatchEdgeBandPerLoadRadius * c.load.radius)
+        << "sample " << i;
   }
+  // Both sides of the band are sampled: under the patch and beyond it.
+  const Eigen::VectorXd distance = (g.sample_points.rowwise() - g.load_centre.transpose()).rowwise().norm();
+  EXPECT_LT(distance.minCoeff(), c.load.radius);
+  EXPECT_GT(distance.maxCoeff(), 2 * c.load.radius);
 }
 
 TEST(BuiltinLung, ImprintedRegionsDoNotDependOnTheMeshSize) {
