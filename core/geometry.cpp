@@ -151,10 +151,11 @@ void tag_regions(const Case& c, const Eigen::Vector3d& load_centre, const Eigen:
                     "the load patch overlaps the fixed region; expected them to be disjoint");
 }
 
-/// Deterministic sample points (paper §5.4): `spec.count` surface points spread evenly over the disc of radius `spec.radius` around the load centre, in
-/// its tangent plane (a sunflower spiral: equal area per point), then snapped to the surface. The annulus
-/// within `band` of the load-patch circle (radius `load_radius`) is left out of the disc, and a point that lands
-/// in the band after snapping (the surface curves) is moved radially until it leaves it.
+/// Deterministic sample points (paper §5.4): `spec.count` surface points spread evenly over the disc of radius
+/// `spec.radius` around the load centre, in its tangent plane (a sunflower spiral: equal area per point), then
+/// snapped to the surface. The annulus within `band` of the load-patch circle (radius `load_radius`) is left out
+/// of the disc, and a point that lands in the band after snapping (the surface curves) is moved radially until it
+/// leaves it.
 PointMatrix choose_samples(const TriangleSurface& surface, const SampleSpec& spec, const Eigen::Vector3d& centre,
                            const Eigen::Vector3d& normal, double load_radius, double band) {
   Eigen::Vector3d helper = Eigen::Vector3d::UnitX();
