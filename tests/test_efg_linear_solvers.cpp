@@ -142,7 +142,7 @@ TEST(EfgLinearSolvers, MumpsAndUmfpackReachTheSameEquilibriumWithNonzeroK) {
   EXPECT_EQ(mumps.linear_solver.rfind("MUMPS", 0), 0u);
   EXPECT_EQ(umfpack.linear_solver.rfind("UMFPACK", 0), 0u);
   EXPECT_GT(b.norm(), 1e-4);
-  EXPECT_LT(difference, 1e-12);
+  EXPECT_LT(difference, 1e-13);  // measured: 2.3e-15 to 3.0e-15
 }
 
 /// A 4 x 4 non-symmetric system with a known solution, as the model's row-major matrix.
