@@ -23,6 +23,17 @@ void check(PetscErrorCode code, const char* call) {
   throw std::runtime_error(fmt::format("PETSc: {} failed: {} (error {})", call, text ? text : "unknown", code));
 }
 
+/// Makes a solver's own options database PETSc's default while it lives. PETSc reads the options of the objects
+/// it creates inside a preconditioner (the multigrid levels' smoothers, "-mg_levels_...") from the default
+/// database, not from the parent's: without this they would silently ignore the options string.
+class DefaultOptionsWhileAlive {
+ public:
+  explicit DefaultOptionsWhileAlive(PetscOptions options) { check(PetscOptionsPush(options), "PetscOptionsPush"); }
+  ~DefaultOptionsWhileAlive() { PetscOptionsPop(); }
+  DefaultOptionsWhileAlive(const DefaultOptionsWhileAlive&) = delete;
+  DefaultOptionsWhileAlive& operator=(const DefaultOptionsWhileAlive&) = delete;
+};
+
 }  // namespace
 
 bool petsc_initialised() { return PetscInitializeCalled == PETSC_TRUE && PetscFinalizeCalled == PETSC_FALSE; }
@@ -82,6 +93,7 @@ AmgKrylovSolver::AmgKrylovSolver(const core::PointMatrix& nodes, const std::stri
   check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
   check(PetscObjectSetOptions(reinterpret_cast<PetscObject>(pc), p.options), "PetscObjectSetOptions");
   check(KSPSetTolerances(p.ksp, relative_tolerance, 0.0, PETSC_DEFAULT, max_iterations), "KSPSetTolerances");
+  const DefaultOptionsWhileAlive own_options(p.options);
   check(KSPSetFromOptions(p.ksp), "KSPSetFromOptions (the options string)");
 }
 
@@ -102,7 +114,21 @@ void AmgKrylovSolver::set_matrix(const SparseMatrix& a) {
   check(MatSetBlockSize(p.a, 3), "MatSetBlockSize");
   check(MatSetNearNullSpace(p.a, p.rigid_body_modes), "MatSetNearNullSpace");
   check(KSPSetOperators(p.ksp, p.a, p.a), "KSPSetOperators");
-  check(KSPSetUp(p.ksp), "KSPSetUp (building the multigrid hierarchy)");
+  {
+    // The node positions (centred), for preconditioners that aggregate by distance (ML's -pc_ml_Aux); the
+    // others ignore them. After KSPSetOperators: ML takes the block size from the matrix.
+    PC pc = nullptr;
+    check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
+    PetscScalar* xyz = nullptr;
+    check(VecGetArray(p.coordinates, &xyz), "VecGetArray");
+    const PetscErrorCode set = PCSetCoordinates(pc, 3, p.n / 3, xyz);
+    check(VecRestoreArray(p.coordinates, &xyz), "VecRestoreArray");
+    check(set, "PCSetCoordinates");
+  }
+  {
+    const DefaultOptionsWhileAlive own_options(p.options);  // the level smoothers read theirs here
+    check(KSPSetUp(p.ksp), "KSPSetUp (building the multigrid hierarchy)");
+  }
   setup_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
   // Levels and operator complexity of PETSc's own multigrid (GAMG); hypre and ML keep theirs inside.
@@ -139,7 +165,11 @@ Eigen::VectorXd AmgKrylovSolver::solve(const Eigen::VectorXd& b) {
   Eigen::VectorXd x = Eigen::VectorXd::Zero(p.n);
   check(VecPlaceArray(p.b, b.data()), "VecPlaceArray");
   check(VecPlaceArray(p.x, x.data()), "VecPlaceArray");
-  const PetscErrorCode solved = KSPSolve(p.ksp, p.b, p.x);
+  PetscErrorCode solved = 0;
+  {
+    const DefaultOptionsWhileAlive own_options(p.options);
+    solved = KSPSolve(p.ksp, p.b, p.x);
+  }
   check(VecResetArray(p.b), "VecResetArray");
   check(VecResetArray(p.x), "VecResetArray");
   check(solved, "KSPSolve");

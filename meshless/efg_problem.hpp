@@ -46,8 +46,11 @@ struct EfgOptions {
   /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.
   double direct_solver_memory_fraction = 0.8;
   /// PETSc options of the amg_krylov solver (its own options database; docs/MESHLESS.md §2 has the measurements
-  /// behind the choice).
-  std::string amg_options = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side right -pc_type ml";
+  /// behind the choice). Twenty GCR iterations (each preconditioned by SOR) smooth every ML level; the smoother
+  /// is a Krylov method, so the outer one must be flexible (FGMRES, right-preconditioned).
+  std::string amg_options =
+      "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
+      "-mg_levels_pc_type sor";
   /// Relative residual of each iterative solve. Newton's own test decides convergence, so a looser solve only
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.
   double iterative_tolerance = 1e-9;
