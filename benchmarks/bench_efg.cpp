@@ -8,7 +8,10 @@
 //  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
 //    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve;
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::amg_options
-//    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5).
+//    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5);
+//    all with PCML's own level smoother (one SSOR sweep); `ml` at 2k and 8k nodes is the earlier default;
+//  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_AMG_OPTIONS (the level-smoother survey of
+//    docs/MESHLESS.md §2).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
