@@ -55,8 +55,10 @@ struct ReferenceErrorBar {
 };
 
 /// Look the reference up in a `tissue verify fem` result (fem.json): the study of the case with this name
-/// applies only when its finest solved level has this mesh size and the same sample displacements as this run
-/// (to a relative 1e-6), i.e. when the study solved exactly this reference.
+/// applies only when one of its solved levels has this mesh size and the same sample displacements as this run
+/// (to a relative 1e-6), i.e. when the study solved exactly this reference. At the study's finest level the
+/// error is the study's estimate; at a coarser level it is that level's distance to the finest plus the
+/// finest's estimate (the triangle inequality: a bound, measured against a finer solve).
 /// @param fem_samples  #samples by 3 [m], this run's FEM sample displacements
 ReferenceErrorBar reference_error_bar(const nlohmann::json& verify_fem, const std::string& source,
                                       const std::string& case_name, double mesh_size,

@@ -113,9 +113,25 @@ TEST(CompareMetrics, ReferenceErrorBarOnlyForTheStudiedSolve) {
   EXPECT_NEAR(bound.rms_mm, 0.03 * 5.0 / std::sqrt(2.0), 1e-12);
   EXPECT_EQ(bound.method, "differences not decreasing");
 
+  // A coarser level of the study: its distance to the finest (1 % of the x components: 0.03 mm, 0.6 % of its
+  // ‖U‖ = 5.018 mm) plus the finest level's 2 % of 5 mm.
+  Eigen::MatrixXd coarse_mm = u_mm;
+  coarse_mm.col(0) *= 1.01;
+  const auto coarse = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.016, coarse_mm * 1e-3);
+  ASSERT_TRUE(coarse.known) << coarse.why_unknown;
+  EXPECT_NEAR(coarse.rms_mm, (0.03 + 0.02 * 5.0) / std::sqrt(2.0), 1e-12);
+  EXPECT_NEAR(coarse.relative, (0.03 + 0.1) / coarse_mm.norm(), 1e-12);
+  EXPECT_NE(coarse.method.find("finest level, 12 mm (0.60 % of this reference)"), std::string::npos) << coarse.method;
+  EXPECT_NE(coarse.method.find("observed order 1.80"), std::string::npos) << coarse.method;
+
   auto b = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.024, u_mm * 1e-3);
   EXPECT_FALSE(b.known);
-  EXPECT_NE(b.why_unknown.find("finest level is 12 mm; this reference is at 24 mm"), std::string::npos) << b.why_unknown;
+  EXPECT_NE(b.why_unknown.find("no level at 24 mm, this reference's mesh size (its finest level is 12 mm)"),
+            std::string::npos)
+      << b.why_unknown;
+  b = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.016, u_mm * 1e-3);  // not the 16 mm solve
+  EXPECT_FALSE(b.known);
+  EXPECT_NE(b.why_unknown.find("16 mm samples differ"), std::string::npos) << b.why_unknown;
   b = experiments::reference_error_bar(study, "fem.json", "lung_large", 0.012, u_mm * 1e-3);
   EXPECT_FALSE(b.known);
   EXPECT_NE(b.why_unknown.find("no mesh study of case 'lung_large'"), std::string::npos) << b.why_unknown;
