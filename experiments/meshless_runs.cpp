@@ -140,8 +140,8 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                        rec.newton_iterations, rec.residuals, rec.linear_iterations, rec.substeps,
                        rec.failed_attempts, rec.admissibility_margin});
     if (on_step)
-      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations, residual {:.2e}{}{}", step, n_steps,
-                          rec.time, rec.newton_iterations, rec.residuals.back(),
+      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} factorisations), residual {:.2e}{}{}",
+                          step, n_steps, rec.time, rec.newton_iterations, rec.factorisations, rec.residuals.back(),
                           rec.reused_factorisation ? " (factorisation reused)" : "",
                           rec.cutbacks > 0 ? fmt::format(", {} cut-backs into {} sub-steps", rec.cutbacks, rec.substeps)
                                            : std::string()));

@@ -3,8 +3,10 @@
 #include <fmt/format.h>
 
 #include <Eigen/IterativeLinearSolvers>
+#include <unsupported/Eigen/IterativeSolvers>
 #include <Eigen/UmfPackSupport>
 #include <chrono>
+#include <functional>
 #include <stdexcept>
 #include <utility>
 
@@ -88,6 +90,7 @@ std::string EfgLinearSolver::description() const {
 
 void EfgLinearSolver::prepare(const SparseMatrix& a) {
   prepared_ = false;
+  factored_ = false;
   const auto t0 = std::chrono::steady_clock::now();
   switch (kind_) {
     case LinearSolverKind::direct: mumps_->factorise(a); break;
@@ -120,6 +123,46 @@ void EfgLinearSolver::prepare(const SparseMatrix& a) {
   }
   prepare_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   prepared_ = true;
+  factored_ = kind_ == LinearSolverKind::direct || kind_ == LinearSolverKind::direct_umfpack;
+}
+
+namespace {
+
+/// Eigen's preconditioner concept around factors computed elsewhere (an earlier tangent's LU): compute() does
+/// nothing, solve() is one back-substitution.
+class EarlierFactors {
+ public:
+  template <typename Matrix>
+  EarlierFactors& compute(const Matrix&) { return *this; }
+  template <typename Matrix>
+  EarlierFactors& analyzePattern(const Matrix&) { return *this; }
+  template <typename Matrix>
+  EarlierFactors& factorize(const Matrix&) { return *this; }
+  Eigen::ComputationInfo info() const { return Eigen::Success; }
+  Eigen::VectorXd solve(const Eigen::VectorXd& b) const { return back_substitute(b); }
+  std::function<Eigen::VectorXd(const Eigen::VectorXd&)> back_substitute;
+};
+
+}  // namespace
+
+std::optional<Eigen::VectorXd> EfgLinearSolver::solve_with_earlier_factors(const SparseMatrix& a,
+                                                                           const Eigen::VectorXd& rhs,
+                                                                           int max_iterations) {
+  if (!factored_ || max_iterations <= 0) return std::nullopt;
+  Eigen::GMRES<SparseMatrix, EarlierFactors> gmres;
+  gmres.preconditioner().back_substitute = [this](const Eigen::VectorXd& b) -> Eigen::VectorXd {
+    if (kind_ == LinearSolverKind::direct) return mumps_->solve(b);
+    return umfpack_->lu.solve(b);
+  };
+  gmres.setTolerance(options_.iterative_tolerance);
+  gmres.setMaxIterations(max_iterations);
+  gmres.set_restart(max_iterations);
+  gmres.compute(a);
+  Eigen::VectorXd x = gmres.solve(rhs);
+  last_iterations_ = static_cast<int>(gmres.iterations());
+  if (gmres.info() != Eigen::Success || !x.allFinite()) return std::nullopt;
+  prepared_ = true;
+  return x;
 }
 
 Eigen::VectorXd EfgLinearSolver::solve(const Eigen::VectorXd& rhs) {

@@ -6,6 +6,7 @@
 // model's tangent reuse, docs/MESHLESS.md §2).
 #include <Eigen/Core>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "meshless/amg_krylov_solver.hpp"
@@ -35,8 +36,20 @@ class EfgLinearSolver {
   void prepare(const SparseMatrix& a);
   /// True after prepare() until invalidate(): solve() may be called.
   bool prepared() const { return prepared_; }
-  /// The matrix changed: the next solve needs prepare() first.
+  /// The matrix changed: the next solve needs prepare() first. The factors stay at hand for
+  /// solve_with_earlier_factors().
   void invalidate() { prepared_ = false; }
+  /// As invalidate(), and the factors may not precondition later matrices either (a failed iterate's, or a body
+  /// whose cut changed).
+  void forget_factors() { prepared_ = false; factored_ = false; }
+  /// A direct solver's factors of an earlier matrix (same pattern) are at hand.
+  bool has_factors() const { return factored_; }
+  /// dx with A dx = rhs for a newer matrix `a` of the pattern the factors were computed for, by GMRES
+  /// preconditioned with those factors (Eigen's GMRES, left-preconditioned, to options.iterative_tolerance).
+  /// std::nullopt when there are no factors or GMRES needs more than max_iterations; the caller then prepares
+  /// `a`. On success the factors count as prepared again: later right-hand sides reuse them.
+  std::optional<Eigen::VectorXd> solve_with_earlier_factors(const SparseMatrix& a, const Eigen::VectorXd& rhs,
+                                                            int max_iterations);
   /// x with A x = rhs for the prepared A. Throws std::runtime_error when the iterative method does not reach
   /// options.iterative_tolerance within options.iterative_max_iterations, or the result is not finite.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs);
@@ -63,6 +76,7 @@ class EfgLinearSolver {
   std::string name_;
   LinearSolverKind kind_ = LinearSolverKind::direct;
   bool prepared_ = false;
+  bool factored_ = false;  // a direct solver's factors exist (of the last prepare()d matrix)
   int last_iterations_ = 0;
   double prepare_seconds_ = 0.0;
   double peak_memory_estimate_ = 0.0, flops_estimate_ = 0.0, available_memory_ = 0.0;

@@ -152,7 +152,7 @@ void EfgModel::build_couplings(bool new_pattern) {
           1e3 * radii_->radius(i)));
   matrix_current_ = false;
   if (!new_pattern) {
-    linear_solver_->invalidate();  // the same method; the values change, so the next solve prepares it again
+    linear_solver_->forget_factors();  // the same method; the body changed, so the next solve factorises again
   } else {
     sparsity_ = std::make_unique<NodalSparsity>(
         n, std::vector<const ShapeTable*>{&volume_, &surface_},
@@ -551,8 +551,18 @@ void EfgModel::assemble_system(bool with_matrix) {
 void EfgModel::solve() {
   if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
     throw std::logic_error("EfgModel::solve without an assembled matrix");
+  last_solve_prepared_ = false;
   if (!linear_solver_->prepared()) {
+    // A newer tangent than the factors: GMRES preconditioned by them costs a few back-substitutions, a fresh
+    // factorisation tens of seconds on the lung (docs/MESHLESS.md §2). factorised_dt_ stays that of the factors.
+    if (std::optional<Eigen::VectorXd> du =
+            linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations)) {
+      u_ += *du;
+      last_linear_iterations_ = linear_solver_->last_iterations();
+      return;
+    }
     linear_solver_->prepare(matrix_);
+    last_solve_prepared_ = true;
     stats_.linear_solver = linear_solver_->description();  // the multigrid reports its levels once built
   }
   u_ += linear_solver_->solve(-residual_);  // eq. 14; solve() checks the update is finite
@@ -599,10 +609,13 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
   // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
   const bool constant_tangent = problem_.material.k == 0.0;
   const core::DivergenceTest diverging;
-  bool refresh = !linear_solver_->prepared() || factorised_dt_ != current_dt_;
+  // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
+  // last-bit difference must not cost a factorisation.
+  auto factors_dt = [&] { return std::abs(factorised_dt_ - current_dt_) <= 1e-9 * std::abs(current_dt_); };
+  bool refresh = !linear_solver_->prepared() || !factors_dt();
   double previous = std::numeric_limits<double>::infinity();
   for (int it = 0;; ++it) {
-    const bool reuse = !refresh && linear_solver_->prepared() && factorised_dt_ == current_dt_;
+    const bool reuse = !refresh && linear_solver_->prepared() && factors_dt();
     auto t0 = std::chrono::steady_clock::now();
     try {
       assemble_system(!reuse);
@@ -636,12 +649,13 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
     }
     rec->solve_seconds += seconds_since(t0);
     rec->linear_iterations += last_linear_iterations_;
+    rec->factorisations += last_solve_prepared_;
     ++rec->newton_iterations;
     ++attempt.iterations;
   }
   if (!attempt.converged()) {
     u_ = u_start;
-    linear_solver_->invalidate();  // factors of a failed iterate: never reuse them
+    linear_solver_->forget_factors();  // factors of a failed iterate: never reuse them
     matrix_current_ = false;
     return attempt;
   }

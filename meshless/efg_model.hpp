@@ -40,6 +40,7 @@ struct StepRecord {
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
   bool reused_factorisation = false;       ///< tangent unchanged (k = 0, same dt): factorisation reused
+  int factorisations = 0;                  ///< prepare() calls (LU factorisations or multigrid set-ups)
   int substeps = 1;                        ///< converged sub-steps (more than 1 after a cut-back)
   int cutbacks = 0;                        ///< halvings of the step
   std::vector<core::NewtonAttempt> failed_attempts;  ///< the Newton attempts that failed, in order
@@ -219,7 +220,8 @@ class EfgModel {
   int weakest_point_ = -1;        // the volume point with the smallest margin (-1: k = 0, not computed)
   core::SmallestMargin smallest_margin_;
   double factorised_dt_ = -1.0;
-  int last_linear_iterations_ = 0;  // of the last iterative solve (0 for the direct solver)
+  int last_linear_iterations_ = 0;
+  bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the multigrid)  // of the last iterative solve (0 for the direct solver)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
   std::vector<StepRecord> records_;

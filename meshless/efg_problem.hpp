@@ -36,6 +36,10 @@ struct EfgOptions {
   /// Keep the factorised tangent while each iteration reduces ||R|| by at least this ratio; refactorise
   /// otherwise (k != 0). 0 gives full Newton (a fresh tangent every iteration).
   double refactor_contraction = 0.2;
+  /// When the kept factors stop contracting (above), the new tangent is first solved by GMRES preconditioned
+  /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many
+  /// iterations to reach iterative_tolerance. Direct solvers only; 0 always factorises. docs/MESHLESS.md §2.
+  int earlier_factors_max_iterations = 30;
   /// Variationally consistent integration (Chen, Hillman & Rueter 2013, linear VCI): add a constant per node
   /// to the test-function gradients so the discrete divergence theorem int grad phi_i = oint phi_i n holds
   /// for the background quadrature. Makes the linear patch test pass to round-off; off = plain eq. 22.
