@@ -1,7 +1,5 @@
 #include "experiments/compare_metrics.hpp"
 
-#include <optional>
-
 #include <fmt/format.h>
 
 #include <cmath>

@@ -42,8 +42,6 @@ class EfgLinearSolver {
   /// As invalidate(), and the factors may not precondition later matrices either (a failed iterate's, or a body
   /// whose cut changed).
   void forget_factors() { prepared_ = false; factored_ = false; }
-  /// A direct solver's factors of an earlier matrix (same pattern) are at hand.
-  bool has_factors() const { return factored_; }
   /// dx with A dx = rhs for a newer matrix `a` of the pattern the factors were computed for, by GMRES
   /// preconditioned with those factors (Eigen's GMRES, left-preconditioned, to options.iterative_tolerance).
   /// std::nullopt when there are no factors or GMRES needs more than max_iterations; the caller then prepares

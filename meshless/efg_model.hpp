@@ -35,7 +35,7 @@ struct StepRecord {
   double dt = 0.0;          ///< [s]
   double load_scale = 0.0;  ///< load_scale(time)
   int newton_iterations = 0;               ///< linear solves
-  int linear_iterations = 0;               ///< Krylov iterations over the step (0 with the direct solver)
+  int linear_iterations = 0;               ///< Krylov iterations over the step (direct solver: GMRES on earlier factors)
   std::vector<double> residuals;           ///< ||R|| / ||F_ext|| before each solve and after the last
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
@@ -220,8 +220,8 @@ class EfgModel {
   int weakest_point_ = -1;        // the volume point with the smallest margin (-1: k = 0, not computed)
   core::SmallestMargin smallest_margin_;
   double factorised_dt_ = -1.0;
-  int last_linear_iterations_ = 0;
-  bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the multigrid)  // of the last iterative solve (0 for the direct solver)
+  int last_linear_iterations_ = 0;    // Krylov iterations of the last solve() (0: a back-substitution alone)
+  bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the multigrid)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
   std::vector<StepRecord> records_;
