@@ -15,6 +15,7 @@
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_mesh.hpp"
 #include "core/gmsh_session.hpp"
+#include "core/mesh_ordering.hpp"
 #include "core/stl_file.hpp"
 #include "core/stl_solid.hpp"
 
@@ -480,6 +481,7 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
   if (options.build_node_cloud) {
     g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);
     tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
+    order_for_locality(&g.meshless_mesh);  // the EFG assembly's cache use (core/mesh_ordering.hpp)
   }
   return g;
 }
