@@ -477,6 +477,7 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
     g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
     if (g.cut) tag_crack_faces(*g.cut, &g.fem_mesh);
+    order_for_locality(&g.fem_mesh);  // cells, hence the FEM's DoFs, numbered for cache use (core/mesh_ordering.hpp)
   }
   if (options.build_node_cloud) {
     g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);

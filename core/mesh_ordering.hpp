@@ -6,7 +6,8 @@
 // its support and reads that point's whole shape-function row (docs/MESHLESS.md §2, "Assembly"): with Gmsh's
 // numbering consecutive nodes share almost no points, and the rows are read from memory again and again. Numbered
 // by reverse Cuthill–McKee (Boost.Graph) and with the tetrahedra (hence the integration points, made cell by cell)
-// sorted by their vertices, consecutive nodes share most of their points, and those rows stay in cache.
+// sorted by their vertices, consecutive nodes share most of their points, and those rows stay in cache. The FEM
+// mesh is numbered the same way: deal.II numbers the degrees of freedom cell by cell, so they follow.
 //
 // The renumbering is a permutation: the mesh is the same set of vertices, tetrahedra and tagged faces.
 #include <vector>
