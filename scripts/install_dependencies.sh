@@ -8,6 +8,7 @@ PACKAGES=(
   libeigen3-dev libdeal.ii-dev libgmsh-dev libceres-dev
   libgtest-dev libbenchmark-dev libfmt-dev nlohmann-json3-dev
   libnanoflann-dev libcli11-dev libsuitesparse-dev
+  libboost-dev           # header-only Boost.Graph (the meshes' numbering) and Boost.Math (tissue rsr)
   libssl-dev             # SHA-256 of the case and of the surrogate file (OpenSSL::Crypto)
   libopenblas0-pthread   # fast BLAS for the sparse LUs (MUMPS, UMFPACK) of both models
   libmumps-dev           # MUMPS: the EFG model's direct solver (meshless/mumps_lu.hpp; also a PETSc dependency)
