@@ -5,6 +5,8 @@
 //    AMG-preconditioned Krylov solve);
 //  * BM_EfgSolveAmgKrylov / BM_EfgSolveMumps / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver
 //    forced, for the ratios within one run and the iterations against the cloud size;
+//  * BM_EfgSolveAmgKrylovWholeMatrix: the AMG-Krylov solve preconditioned from the whole tangent instead of its
+//    sparser copy (EfgOptions::amg_preconditioner_drop_tolerance);
 //  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
 //    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve;
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::amg_options
@@ -49,9 +51,11 @@ struct Variant {
   bool variationally_consistent = true;
   double d_max = 2.0;
   double penalty_factor = 1e3;
+  double drop_tolerance = meshless::EfgOptions{}.amg_preconditioner_drop_tolerance;
   bool operator!=(const Variant& o) const {
-    return std::tie(solver, amg_options, variationally_consistent, d_max, penalty_factor) !=
-           std::tie(o.solver, o.amg_options, o.variationally_consistent, o.d_max, o.penalty_factor);
+    return std::tie(solver, amg_options, variationally_consistent, d_max, penalty_factor, drop_tolerance) !=
+           std::tie(o.solver, o.amg_options, o.variationally_consistent, o.d_max, o.penalty_factor,
+                    o.drop_tolerance);
   }
 };
 
@@ -73,6 +77,7 @@ meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
     meshless::EfgOptions options;
     options.linear_solver = variant.solver;
     options.variationally_consistent = variant.variationally_consistent;
+    options.amg_preconditioner_drop_tolerance = variant.drop_tolerance;
     if (!variant.amg_options.empty()) options.amg_options = variant.amg_options;
     meshless::EfgProblem problem = meshless::sheared_box_problem(side);
     problem.support.d_max = variant.d_max;
@@ -135,6 +140,14 @@ void time_solve(benchmark::State& state, const Variant& variant) {
 
 void BM_EfgSolve(benchmark::State& state) { time_solve(state, {}); }
 void BM_EfgSolveAmgKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::amg_krylov}); }
+/// The AMG-Krylov solve with its preconditioner built from the whole tangent (no drop tolerance), against
+/// BM_EfgSolveAmgKrylov's sparser copy (EfgOptions::amg_preconditioner_drop_tolerance).
+void BM_EfgSolveAmgKrylovWholeMatrix(benchmark::State& state) {
+  Variant v;
+  v.solver = LinearSolverKind::amg_krylov;
+  v.drop_tolerance = 0.0;
+  time_solve(state, v);
+}
 void BM_EfgSolveMumps(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
 void BM_EfgSolveUmfpack(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct_umfpack}); }
 
@@ -214,6 +227,7 @@ BENCHMARK(BM_EfgAssembly)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->
 // choice (BM_EfgSolve/32) is the AMG-Krylov solve.
 BENCHMARK(BM_EfgSolve)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveAmgKrylov)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveAmgKrylovWholeMatrix)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveMumps)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct)->Unit(benchmark::kSecond)->Iterations(1);

@@ -28,21 +28,28 @@ class AmgKrylovSolver {
   ///        alone (its own options database, not the global one). The defaults are in EfgOptions.
   /// @param relative_tolerance, max_iterations  stopping test of each solve (||r|| <= tol ||b||), set
   ///        before the options string, which may override them.
-  /// Throws std::logic_error when PETSc is not initialised, std::runtime_error when PETSc rejects an option.
+  /// @param drop_tolerance  > 0: the preconditioner is built from a copy of each matrix without its small
+  ///        off-node entries (|a_ij| < drop_tolerance sqrt(|a_ii a_jj|)); the Krylov method applies the matrix
+  ///        itself. 0: from the matrix itself. See EfgOptions::amg_preconditioner_drop_tolerance.
+  /// Throws std::logic_error when PETSc is not initialised, std::runtime_error when PETSc rejects an option,
+  /// std::invalid_argument for a negative drop_tolerance.
   AmgKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,
-                  int max_iterations);
+                  int max_iterations, double drop_tolerance = 0.0);
   ~AmgKrylovSolver();
   AmgKrylovSolver(const AmgKrylovSolver&) = delete;
   AmgKrylovSolver& operator=(const AmgKrylovSolver&) = delete;
 
   /// Use `a` (3N by 3N, compressed, sorted column indices) from now on and build the multigrid hierarchy for
-  /// it. The arrays of `a` are referenced, not copied: `a` must stay alive and unchanged (values, pattern)
-  /// until the next set_matrix() or the destructor.
+  /// it (or for its sparser copy, with a drop tolerance). The arrays of `a` are referenced, not copied: `a` must
+  /// stay alive and unchanged (values, pattern) until the next set_matrix() or the destructor.
   void set_matrix(const SparseMatrix& a);
   /// x with A x = b. Throws std::runtime_error naming PETSc's reason when the stopping test is not met.
   Eigen::VectorXd solve(const Eigen::VectorXd& b);
 
   int last_iterations() const { return last_iterations_; }
+  /// Entries of the matrix the preconditioner was built from in the last set_matrix(), over those of `a` (1
+  /// without a drop tolerance).
+  double preconditioner_fill() const { return preconditioner_fill_; }
   /// Seconds spent building the hierarchy in the last set_matrix().
   double setup_seconds() const { return setup_seconds_; }
   /// Multigrid levels and the operator complexity (sum of the non-zeros of all level operators / those of
@@ -56,8 +63,10 @@ class AmgKrylovSolver {
  private:
   struct Petsc;
   std::unique_ptr<Petsc> petsc_;
+  double drop_tolerance_ = 0.0;
   int last_iterations_ = 0;
   double setup_seconds_ = 0.0;
+  double preconditioner_fill_ = 1.0;
   int levels_ = 0;
   double operator_complexity_ = 0.0;
 };

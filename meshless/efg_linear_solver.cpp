@@ -68,7 +68,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
                               peak_memory_estimate_ / 1e9, available_memory_ / 1e9)
                 : std::string("AMG-Krylov")));
       amg_ = std::make_unique<AmgKrylovSolver>(nodes, options_.amg_options, options_.iterative_tolerance,
-                                               options_.iterative_max_iterations);
+                                               options_.iterative_max_iterations,
+                                               options_.amg_preconditioner_drop_tolerance);
       break;
     case LinearSolverKind::jacobi_bicgstab: jacobi_ = std::make_unique<JacobiBicgstab>(); break;
     case LinearSolverKind::automatic: break;  // resolved above
