@@ -2,18 +2,18 @@
 // quadrature order 2 on 6 tets per grid cell): one full assembly of eqs. 20-24 (material update, residual and
 // tangent) and one elastic load step with each linear solver (docs/PERFORMANCE.md, docs/MESHLESS.md §2):
 //  * BM_EfgSolve: the automatic choice (the direct solver, MUMPS, when its estimated LU fits the available memory, else the
-//    AMG-preconditioned Krylov solve);
-//  * BM_EfgSolveAmgKrylov / BM_EfgSolveMumps / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver
+//    PETSc Krylov solve);
+//  * BM_EfgSolveKrylov / BM_EfgSolveMumps / BM_EfgSolveUmfpack / BM_EfgSolveJacobiBicgstab: each solver
 //    forced, for the ratios within one run and the iterations against the cloud size;
-//  * BM_EfgSolveAmgKrylovWholeMatrix: the AMG-Krylov solve preconditioned from the whole tangent instead of its
-//    sparser copy (EfgOptions::amg_preconditioner_drop_tolerance);
+//  * BM_EfgSolveMlGcr: the PETSc Krylov solve with the earlier default options (FGMRES, ML with GCR(20)/SOR level
+//    smoothers, built from the tangent's sparser copy), against BM_EfgSolveKrylov's SSOR by Eisenstat's trick;
 //  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
 //    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve;
-//  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::amg_options
+//  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::krylov_options
 //    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5);
 //    all with PCML's own level smoother (one SSOR sweep); `ml` at 2k and 8k nodes is the earlier default;
-//  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_AMG_OPTIONS (the level-smoother survey of
-//    docs/MESHLESS.md §2).
+//  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_KRYLOV_OPTIONS, and the drop tolerance of the
+//    preconditioner's matrix from EFG_DROP_TOLERANCE (the surveys of docs/MESHLESS.md §2).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
@@ -47,14 +47,14 @@ double peak_memory_gb() {
 /// A variant of the sheared box and of the solver options.
 struct Variant {
   LinearSolverKind solver = LinearSolverKind::automatic;
-  std::string amg_options;  // empty: EfgOptions' default
+  std::string krylov_options;  // empty: EfgOptions' default
   bool variationally_consistent = true;
   double d_max = 2.0;
   double penalty_factor = 1e3;
-  double drop_tolerance = meshless::EfgOptions{}.amg_preconditioner_drop_tolerance;
+  double drop_tolerance = meshless::EfgOptions{}.preconditioner_drop_tolerance;
   bool operator!=(const Variant& o) const {
-    return std::tie(solver, amg_options, variationally_consistent, d_max, penalty_factor, drop_tolerance) !=
-           std::tie(o.solver, o.amg_options, o.variationally_consistent, o.d_max, o.penalty_factor,
+    return std::tie(solver, krylov_options, variationally_consistent, d_max, penalty_factor, drop_tolerance) !=
+           std::tie(o.solver, o.krylov_options, o.variationally_consistent, o.d_max, o.penalty_factor,
                     o.drop_tolerance);
   }
 };
@@ -77,8 +77,8 @@ meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
     meshless::EfgOptions options;
     options.linear_solver = variant.solver;
     options.variationally_consistent = variant.variationally_consistent;
-    options.amg_preconditioner_drop_tolerance = variant.drop_tolerance;
-    if (!variant.amg_options.empty()) options.amg_options = variant.amg_options;
+    options.preconditioner_drop_tolerance = variant.drop_tolerance;
+    if (!variant.krylov_options.empty()) options.krylov_options = variant.krylov_options;
     meshless::EfgProblem problem = meshless::sheared_box_problem(side);
     problem.support.d_max = variant.d_max;
     problem.penalty_factor = variant.penalty_factor;
@@ -139,13 +139,16 @@ void time_solve(benchmark::State& state, const Variant& variant) {
 }
 
 void BM_EfgSolve(benchmark::State& state) { time_solve(state, {}); }
-void BM_EfgSolveAmgKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::amg_krylov}); }
-/// The AMG-Krylov solve with its preconditioner built from the whole tangent (no drop tolerance), against
-/// BM_EfgSolveAmgKrylov's sparser copy (EfgOptions::amg_preconditioner_drop_tolerance).
-void BM_EfgSolveAmgKrylovWholeMatrix(benchmark::State& state) {
+void BM_EfgSolveKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::petsc_krylov}); }
+/// The options EfgOptions::krylov_options had before SSOR by Eisenstat's trick: ML with GCR(20)/SOR level smoothers,
+/// the hierarchy and the sweeps built from the tangent's sparser copy (drop tolerance 0.01), under FGMRES(200).
+void BM_EfgSolveMlGcr(benchmark::State& state) {
   Variant v;
-  v.solver = LinearSolverKind::amg_krylov;
-  v.drop_tolerance = 0.0;
+  v.solver = LinearSolverKind::petsc_krylov;
+  v.krylov_options =
+      "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
+      "-mg_levels_pc_type sor";
+  v.drop_tolerance = 0.01;
   time_solve(state, v);
 }
 void BM_EfgSolveMumps(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
@@ -203,18 +206,22 @@ void BM_EfgSolveJacobiBicgstab(benchmark::State& state) { time_solve(state, {Lin
 
 void BM_EfgPreconditioner(benchmark::State& state, const std::string& options, bool vci, double d_max,
                           double penalty_factor = 1e3) {
-  time_solve(state, {LinearSolverKind::amg_krylov, options, vci, d_max, penalty_factor});
+  time_solve(state, {LinearSolverKind::petsc_krylov, options, vci, d_max, penalty_factor});
 }
 
-/// Any PETSc options string, from the environment variable EFG_AMG_OPTIONS (a survey of one's own options;
-/// reports an error when the variable is unset).
+/// Any PETSc options string, from the environment variable EFG_KRYLOV_OPTIONS, and the drop tolerance of the
+/// preconditioner's matrix from EFG_DROP_TOLERANCE (a survey of one's own options; reports an error when the options
+/// are unset).
 void BM_EfgPreconditionerFromEnvironment(benchmark::State& state) {
-  const char* options = std::getenv("EFG_AMG_OPTIONS");
+  const char* options = std::getenv("EFG_KRYLOV_OPTIONS");
   if (!options || !*options) {
-    state.SkipWithError("set EFG_AMG_OPTIONS to the PETSc options to measure");
+    state.SkipWithError("set EFG_KRYLOV_OPTIONS to the PETSc options to measure");
     return;
   }
-  time_solve(state, {LinearSolverKind::amg_krylov, options, true, 2.0});
+  Variant variant{LinearSolverKind::petsc_krylov, options, true, 2.0};
+  // The preconditioner's matrix: the tangent itself by default; EFG_DROP_TOLERANCE=0.01 gives the sparser copy.
+  if (const char* drop = std::getenv("EFG_DROP_TOLERANCE"); drop && *drop) variant.drop_tolerance = std::stod(drop);
+  time_solve(state, variant);
 }
 
 const std::string kGmres = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side right ";
@@ -224,10 +231,10 @@ const std::string kGmres = "-ksp_type gmres -ksp_gmres_restart 200 -ksp_pc_side 
 BENCHMARK(BM_EfgSetup)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgAssembly)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(2);
 // All solvers at each size (ratios within one run). The 32k cloud does not fit UMFPACK, so its automatic
-// choice (BM_EfgSolve/32) is the AMG-Krylov solve.
+// choice (BM_EfgSolve/32) is the PETSc Krylov solve.
 BENCHMARK(BM_EfgSolve)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK(BM_EfgSolveAmgKrylov)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK(BM_EfgSolveAmgKrylovWholeMatrix)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveKrylov)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK(BM_EfgSolveMlGcr)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveMumps)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct)->Unit(benchmark::kSecond)->Iterations(1);
@@ -260,7 +267,7 @@ BENCHMARK_CAPTURE(BM_EfgPreconditioner, penalty_10_ml, kGmres + "-pc_type ml", t
 BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", true, 1.5)
     ->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
-// EFG_AMG_OPTIONS='...' BENCH_FILTER='BM_EfgPreconditionerFromEnvironment/13/' scripts/run_benchmarks.sh bench_efg
+// EFG_KRYLOV_OPTIONS='...' BENCH_FILTER='BM_EfgPreconditionerFromEnvironment/13/' scripts/run_benchmarks.sh bench_efg
 BENCHMARK(BM_EfgPreconditionerFromEnvironment)->Arg(10)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 int main(int argc, char** argv) {

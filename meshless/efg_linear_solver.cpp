@@ -51,25 +51,25 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
     available_memory_ = available_memory().bytes;
     kind_ = e.peak_memory_bytes <= options_.direct_solver_memory_fraction * available_memory_
                 ? LinearSolverKind::direct
-                : LinearSolverKind::amg_krylov;
+                : LinearSolverKind::petsc_krylov;
   }
   switch (kind_) {
     case LinearSolverKind::direct: mumps_ = std::make_unique<MumpsLu>(name_); break;
     case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
-    case LinearSolverKind::amg_krylov:
+    case LinearSolverKind::petsc_krylov:
       if (!petsc_initialised())
         throw std::logic_error(fmt::format(
             "EfgModel '{}': the {} solver needs PETSc, which is not initialised in this program (construct "
             "dealii::Utilities::MPI::MPI_InitFinalize at the start of main)",
             name_,
             options.linear_solver == LinearSolverKind::automatic
-                ? fmt::format("AMG-Krylov (chosen because the LU needs an estimated {:.3g} GB of {:.3g} GB "
+                ? fmt::format("PETSc Krylov (chosen because the LU needs an estimated {:.3g} GB of {:.3g} GB "
                               "available)",
                               peak_memory_estimate_ / 1e9, available_memory_ / 1e9)
-                : std::string("AMG-Krylov")));
-      amg_ = std::make_unique<AmgKrylovSolver>(nodes, options_.amg_options, options_.iterative_tolerance,
-                                               options_.iterative_max_iterations,
-                                               options_.amg_preconditioner_drop_tolerance);
+                : std::string("PETSc Krylov")));
+      krylov_ = std::make_unique<PetscKrylovSolver>(nodes, options_.krylov_options, options_.iterative_tolerance,
+                                                    options_.iterative_max_iterations,
+                                                    options_.preconditioner_drop_tolerance);
       break;
     case LinearSolverKind::jacobi_bicgstab: jacobi_ = std::make_unique<JacobiBicgstab>(); break;
     case LinearSolverKind::automatic: break;  // resolved above
@@ -82,7 +82,7 @@ std::string EfgLinearSolver::description() const {
   switch (kind_) {
     case LinearSolverKind::direct: return "MUMPS sparse LU (METIS ordering)";
     case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
-    case LinearSolverKind::amg_krylov: return amg_->description();
+    case LinearSolverKind::petsc_krylov: return krylov_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";
     case LinearSolverKind::automatic: break;
   }
@@ -112,7 +112,7 @@ void EfgLinearSolver::prepare(const SparseMatrix& a) {
             fmt::format("EfgModel '{}': sparse LU factorisation failed: {}", name_, Umfpack::describe(status)));
       break;
     }
-    case LinearSolverKind::amg_krylov: amg_->set_matrix(a); break;
+    case LinearSolverKind::petsc_krylov: krylov_->set_matrix(a); break;
     case LinearSolverKind::jacobi_bicgstab: {
       auto& s = jacobi_->bicgstab;
       s.setTolerance(options_.iterative_tolerance);
@@ -173,13 +173,13 @@ Eigen::VectorXd EfgLinearSolver::solve(const Eigen::VectorXd& rhs) {
   switch (kind_) {
     case LinearSolverKind::direct: x = mumps_->solve(rhs); break;
     case LinearSolverKind::direct_umfpack: x = umfpack_->lu.solve(rhs); break;
-    case LinearSolverKind::amg_krylov:
+    case LinearSolverKind::petsc_krylov:
       try {
-        x = amg_->solve(rhs);
+        x = krylov_->solve(rhs);
       } catch (const std::runtime_error& e) {
         throw std::runtime_error(fmt::format("EfgModel '{}': {}", name_, e.what()));
       }
-      last_iterations_ = amg_->last_iterations();
+      last_iterations_ = krylov_->last_iterations();
       break;
     case LinearSolverKind::jacobi_bicgstab: {
       auto& s = jacobi_->bicgstab;
@@ -188,7 +188,7 @@ Eigen::VectorXd EfgLinearSolver::solve(const Eigen::VectorXd& rhs) {
       if (s.info() != Eigen::Success)
         throw std::runtime_error(fmt::format(
             "EfgModel '{}': BiCGSTAB did not converge ({} iterations, error {:.3g}); raise iterative_max_iterations "
-            "or use amg_krylov",
+            "or use petsc_krylov",
             name_, s.iterations(), s.error()));
       break;
     }

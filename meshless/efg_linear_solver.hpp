@@ -1,15 +1,15 @@
 #pragma once
 // The linear solves of the EFG model: (K_n + K^alpha_n) dU = -R of eq. 20, once per Newton iteration. The
 // model assembles the matrix; this class decides how to solve with it (options.linear_solver: MUMPS's sparse
-// LU (or UMFPACK's, kept for comparison), a PETSc Krylov method preconditioned by algebraic multigrid, or Jacobi-BiCGSTAB), prepares it once per
-// matrix (factorisation or preconditioner set-up) and then solves any number of right-hand sides with it (the
-// model's tangent reuse, docs/MESHLESS.md §2).
+// LU (or UMFPACK's, kept for comparison), a PETSc Krylov method (SSOR by Eisenstat's trick, or algebraic
+// multigrid), or Jacobi-BiCGSTAB), prepares it once per matrix (factorisation or preconditioner set-up) and then
+// solves any number of right-hand sides with it (the model's tangent reuse, docs/MESHLESS.md §2).
 #include <Eigen/Core>
 #include <memory>
 #include <optional>
 #include <string>
 
-#include "meshless/amg_krylov_solver.hpp"
+#include "meshless/petsc_krylov_solver.hpp"
 #include "meshless/efg_problem.hpp"
 #include "meshless/mumps_lu.hpp"
 #include "meshless/nodal_sparsity.hpp"
@@ -20,9 +20,9 @@ class EfgLinearSolver {
  public:
   /// Chooses the method for the matrices of `sparsity` (options.linear_solver; automatic: the direct solver
   /// when the estimated peak memory of its LU (meshless/direct_solver_estimate.hpp) is below
-  /// options.direct_solver_memory_fraction of available_memory(), else amg_krylov). `nodes` (#nodes by 3, m)
-  /// give the rigid-body modes of the multigrid. `name` labels error messages (the problem). No argument is
-  /// referenced after construction. Throws std::logic_error when amg_krylov is chosen and PETSc is not
+  /// options.direct_solver_memory_fraction of available_memory(), else petsc_krylov). `nodes` (#nodes by 3, m)
+  /// give the rigid-body modes of a multigrid preconditioner. `name` labels error messages (the problem). No argument is
+  /// referenced after construction. Throws std::logic_error when petsc_krylov is chosen and PETSc is not
   /// initialised.
   EfgLinearSolver(const EfgOptions& options, const NodalSparsity& sparsity, const core::PointMatrix& nodes,
                   std::string name);
@@ -52,13 +52,13 @@ class EfgLinearSolver {
   /// options.iterative_tolerance within options.iterative_max_iterations, or the result is not finite.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs);
 
-  /// The method in use: direct, amg_krylov or jacobi_bicgstab (never automatic).
+  /// The method in use: direct, petsc_krylov or jacobi_bicgstab (never automatic).
   LinearSolverKind kind() const { return kind_; }
   /// Krylov iterations of the last solve (0 for the direct solver).
   int last_iterations() const { return last_iterations_; }
-  /// Seconds of the last prepare() (factorisation, or multigrid set-up).
+  /// Seconds of the last prepare() (factorisation, or the preconditioner's set-up).
   double prepare_seconds() const { return prepare_seconds_; }
-  /// The method, for reports ("MUMPS sparse LU (METIS ordering)", "PETSc gmres + gamg (4 levels, ...)", ...).
+  /// The method, for reports ("MUMPS sparse LU (METIS ordering)", "PETSc lgmres + eisenstat", ...).
   std::string description() const;
   /// The estimate and the budget the automatic choice compared [bytes, flops]; 0 when the method was set
   /// explicitly.
@@ -80,7 +80,7 @@ class EfgLinearSolver {
   double peak_memory_estimate_ = 0.0, flops_estimate_ = 0.0, available_memory_ = 0.0;
   std::unique_ptr<MumpsLu> mumps_;
   std::unique_ptr<Umfpack> umfpack_;
-  std::unique_ptr<AmgKrylovSolver> amg_;
+  std::unique_ptr<PetscKrylovSolver> krylov_;
   std::unique_ptr<JacobiBicgstab> jacobi_;
 };
 

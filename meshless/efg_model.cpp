@@ -563,7 +563,7 @@ void EfgModel::solve() {
     }
     linear_solver_->prepare(matrix_);
     last_solve_prepared_ = true;
-    stats_.linear_solver = linear_solver_->description();  // the multigrid reports its levels once built
+    stats_.linear_solver = linear_solver_->description();  // a multigrid reports its levels once built
   }
   u_ += linear_solver_->solve(-residual_);  // eq. 14; solve() checks the update is finite
   last_linear_iterations_ = linear_solver_->last_iterations();

@@ -40,7 +40,7 @@ struct StepRecord {
   double assembly_seconds = 0.0;
   double solve_seconds = 0.0;
   bool reused_factorisation = false;       ///< tangent unchanged (k = 0, same dt): factorisation reused
-  int factorisations = 0;                  ///< prepare() calls (LU factorisations or multigrid set-ups)
+  int factorisations = 0;                  ///< prepare() calls (LU factorisations or preconditioner set-ups)
   int substeps = 1;                        ///< converged sub-steps (more than 1 after a cut-back)
   int cutbacks = 0;                        ///< halvings of the step
   std::vector<core::NewtonAttempt> failed_attempts;  ///< the Newton attempts that failed, in order
@@ -221,7 +221,7 @@ class EfgModel {
   core::SmallestMargin smallest_margin_;
   double factorised_dt_ = -1.0;
   int last_linear_iterations_ = 0;    // Krylov iterations of the last solve() (0: a back-substitution alone)
-  bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the multigrid)
+  bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the preconditioner)
   bool matrix_current_ = false;  // matrix_ matches the current iterate
 
   std::vector<StepRecord> records_;

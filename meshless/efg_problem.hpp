@@ -22,10 +22,10 @@ using VectorField = std::function<Eigen::Vector3d(const Eigen::Vector3d& x)>;
 using LipTraction = std::function<Eigen::Vector3d(const Eigen::Vector3d& x, const Eigen::Vector3d& outward_normal)>;
 
 enum class LinearSolverKind {
-  automatic,        ///< direct when the estimated peak memory of the LU fits the available memory, else amg_krylov
+  automatic,        ///< direct when the estimated peak memory of the LU fits the available memory, else petsc_krylov
   direct,           ///< MUMPS sparse LU (meshless/mumps_lu.hpp); works for the non-symmetric tangent; needs MPI initialised
   direct_umfpack,   ///< UMFPACK sparse LU, the earlier direct solver (kept for comparison: 1.7x slower on the lung)
-  amg_krylov,       ///< PETSc Krylov method + algebraic multigrid (EfgOptions::amg_options); needs PETSc initialised
+  petsc_krylov,     ///< a PETSc Krylov method and preconditioner (EfgOptions::krylov_options); needs PETSc initialised
   jacobi_bicgstab,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (the earlier fallback, kept for comparison)
 };
 
@@ -49,18 +49,21 @@ struct EfgOptions {
   /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
   /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.
   double direct_solver_memory_fraction = 0.8;
-  /// PETSc options of the amg_krylov solver (its own options database; docs/MESHLESS.md §2 has the measurements
-  /// behind the choice). Twenty GCR iterations (each preconditioned by SOR) smooth every ML level; the smoother
-  /// is a Krylov method, so the outer one must be flexible (FGMRES, right-preconditioned).
-  std::string amg_options =
-      "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
-      "-mg_levels_pc_type sor";
-  /// The amg_krylov solver builds its preconditioner (the ML hierarchy and the levels' SOR sweeps) from a copy of
-  /// the tangent without its small entries: an entry a_ij is dropped when |a_ij| < this * sqrt(|a_ii a_jj|) and i,
-  /// j belong to different nodes. The Krylov method and the GCR smoother still apply the whole tangent. At 0.01 the
-  /// copy keeps about a quarter of the entries, and a 32k-node box solves 1.24x faster with the same iterations;
-  /// 0 preconditions with the tangent itself (docs/MESHLESS.md §2, "A sparser matrix for the preconditioner").
-  double amg_preconditioner_drop_tolerance = 0.01;
+  /// PETSc options of the petsc_krylov solver (its own options database; docs/MESHLESS.md §2 has the measurements
+  /// behind the choice): LGMRES(100), left-preconditioned by SSOR applied through Eisenstat's trick, so that an
+  /// iteration costs one pass over the tangent (two triangular sweeps) instead of a product and a sweep. SSOR-GMRES
+  /// alone matched ML with Krylov level smoothers: the wide EFG rows make the ML hierarchy too coarse to help
+  /// (docs/MESHLESS.md §2, "The iterative solver"). The earlier default, kept for comparison:
+  /// "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20
+  /// -mg_levels_pc_type sor" with preconditioner_drop_tolerance 0.01.
+  std::string krylov_options = "-ksp_type lgmres -ksp_gmres_restart 100 -pc_type eisenstat";
+  /// > 0: the petsc_krylov solver builds its preconditioner (for example an ML hierarchy and its levels' SOR sweeps)
+  /// from a copy of the tangent without its small entries: an entry a_ij is dropped when |a_ij| < this *
+  /// sqrt(|a_ii a_jj|) and i, j belong to different nodes; the Krylov method still applies the whole tangent. At 0.01
+  /// the copy keeps about a quarter of the entries (docs/MESHLESS.md §2, "A sparser matrix for the preconditioner").
+  /// 0 (the default) preconditions with the tangent itself, which Eisenstat's trick needs: PetscKrylovSolver refuses
+  /// a drop tolerance with -pc_type eisenstat.
+  double preconditioner_drop_tolerance = 0.0;
   /// Relative residual of each iterative solve. Newton's own test decides convergence, so a looser solve only
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.
   double iterative_tolerance = 1e-9;

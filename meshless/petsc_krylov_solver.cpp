@@ -1,4 +1,4 @@
-#include "meshless/amg_krylov_solver.hpp"
+#include "meshless/petsc_krylov_solver.hpp"
 
 #include <fmt/format.h>
 #include <petscksp.h>
@@ -39,7 +39,7 @@ class DefaultOptionsWhileAlive {
 
 bool petsc_initialised() { return PetscInitializeCalled == PETSC_TRUE && PetscFinalizeCalled == PETSC_FALSE; }
 
-struct AmgKrylovSolver::Petsc {
+struct PetscKrylovSolver::Petsc {
   PetscOptions options = nullptr;
   KSP ksp = nullptr;
   Mat a = nullptr;
@@ -64,15 +64,15 @@ struct AmgKrylovSolver::Petsc {
   }
 };
 
-AmgKrylovSolver::AmgKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options,
+PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options,
                                  double relative_tolerance, int max_iterations, double drop_tolerance)
     : petsc_(std::make_unique<Petsc>()), drop_tolerance_(drop_tolerance) {
   if (!(drop_tolerance >= 0.0))
     throw std::invalid_argument(
-        fmt::format("AmgKrylovSolver: the drop tolerance must be >= 0 (0: none), got {}", drop_tolerance));
+        fmt::format("PetscKrylovSolver: the drop tolerance must be >= 0 (0: none), got {}", drop_tolerance));
   if (!petsc_initialised())
     throw std::logic_error(
-        "AmgKrylovSolver: PETSc is not initialised; construct dealii::Utilities::MPI::MPI_InitFinalize (or call "
+        "PetscKrylovSolver: PETSc is not initialised; construct dealii::Utilities::MPI::MPI_InitFinalize (or call "
         "PetscInitialize) at the start of main");
   Petsc& p = *petsc_;
   p.n = static_cast<PetscInt>(3 * nodes.rows());
@@ -102,14 +102,35 @@ AmgKrylovSolver::AmgKrylovSolver(const core::PointMatrix& nodes, const std::stri
   check(KSPSetTolerances(p.ksp, relative_tolerance, 0.0, PETSC_DEFAULT, max_iterations), "KSPSetTolerances");
   const DefaultOptionsWhileAlive own_options(p.options);
   check(KSPSetFromOptions(p.ksp), "KSPSetFromOptions (the options string)");
+
+  // Eisenstat's trick applies SSOR of the preconditioner's matrix through a transformed operator built from that
+  // same matrix: with a sparser copy the Krylov method would converge to the copy's solution, not the tangent's.
+  PetscBool eisenstat = PETSC_FALSE;
+  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(pc), PCEISENSTAT, &eisenstat), "PetscObjectTypeCompare");
+  if (eisenstat) {
+    if (drop_tolerance > 0.0)
+      throw std::invalid_argument(fmt::format(
+          "PetscKrylovSolver: -pc_type eisenstat needs the tangent itself as the preconditioner's matrix, but a drop "
+          "tolerance of {:g} was given (EfgOptions::preconditioner_drop_tolerance): set it to 0, or choose another "
+          "preconditioner",
+          drop_tolerance));
+    PetscReal omega = 1.0;
+    check(PCEisenstatGetOmega(pc, &omega), "PCEisenstatGetOmega");
+    if (omega != 1.0)
+      throw std::invalid_argument(fmt::format(
+          "PetscKrylovSolver: -pc_eisenstat_omega {:g}: PETSc 3.18's Eisenstat preconditioner crashes with a relaxation "
+          "factor other than 1 on this matrix format (in MatMultDiagonalBlock_SeqAIJ_Inode); leave it at 1, or use "
+          "-pc_type sor -pc_sor_omega {:g}",
+          omega, omega));
+  }
 }
 
-AmgKrylovSolver::~AmgKrylovSolver() = default;
+PetscKrylovSolver::~PetscKrylovSolver() = default;
 
-void AmgKrylovSolver::set_matrix(const SparseMatrix& a) {
+void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
   Petsc& p = *petsc_;
   if (a.rows() != p.n || a.cols() != p.n || !a.isCompressed())
-    throw std::invalid_argument(fmt::format("AmgKrylovSolver::set_matrix: expected a compressed {} x {} matrix, got {} x {}",
+    throw std::invalid_argument(fmt::format("PetscKrylovSolver::set_matrix: expected a compressed {} x {} matrix, got {} x {}",
                                             p.n, p.n, a.rows(), a.cols()));
   const auto t0 = std::chrono::steady_clock::now();
   if (p.a) check(MatDestroy(&p.a), "MatDestroy");
@@ -188,10 +209,10 @@ void AmgKrylovSolver::set_matrix(const SparseMatrix& a) {
   }
 }
 
-Eigen::VectorXd AmgKrylovSolver::solve(const Eigen::VectorXd& b) {
+Eigen::VectorXd PetscKrylovSolver::solve(const Eigen::VectorXd& b) {
   Petsc& p = *petsc_;
-  if (!p.a) throw std::logic_error("AmgKrylovSolver::solve before set_matrix");
-  if (b.size() != p.n) throw std::invalid_argument("AmgKrylovSolver::solve: wrong right-hand side size");
+  if (!p.a) throw std::logic_error("PetscKrylovSolver::solve before set_matrix");
+  if (b.size() != p.n) throw std::invalid_argument("PetscKrylovSolver::solve: wrong right-hand side size");
   Eigen::VectorXd x = Eigen::VectorXd::Zero(p.n);
   check(VecPlaceArray(p.b, b.data()), "VecPlaceArray");
   check(VecPlaceArray(p.x, x.data()), "VecPlaceArray");
@@ -219,7 +240,7 @@ Eigen::VectorXd AmgKrylovSolver::solve(const Eigen::VectorXd& b) {
   return x;
 }
 
-std::string AmgKrylovSolver::description() const {
+std::string PetscKrylovSolver::description() const {
   const Petsc& p = *petsc_;
   KSPType ksp_type = nullptr;
   PCType pc_type = nullptr;

@@ -1,8 +1,9 @@
 #pragma once
-// A Krylov solve of the EFG tangent preconditioned by algebraic multigrid, through PETSc (KSP + PC): PETSc's
-// smoothed aggregation (GAMG), hypre's BoomerAMG or Trilinos ML, chosen by a PETSc options string. The six
-// rigid-body modes of the node cloud are the near-null space the aggregation must reproduce, and the 3 x 3
-// node blocks are the matrix's block size. PETSc stays out of this header.
+// A Krylov solve of the EFG tangent through PETSc (KSP + PC), the method and the preconditioner chosen by a PETSc
+// options string: by default LGMRES with SSOR applied through Eisenstat's trick (EfgOptions::krylov_options), or
+// algebraic multigrid (PETSc's GAMG, hypre's BoomerAMG, Trilinos ML). The six rigid-body modes of the node cloud
+// are the near-null space that multigrid aggregation must reproduce, and the 3 x 3 node blocks are the matrix's
+// block size. PETSc stays out of this header.
 //
 // PETSc (and MPI) must be initialised before the first solver is constructed and finalised after the last
 // one is destroyed: dealii::Utilities::MPI::MPI_InitFinalize in main does both. Serial only
@@ -20,7 +21,7 @@ namespace meshless {
 /// True once PETSc is initialised in this process (PetscInitialize or MPI_InitFinalize).
 bool petsc_initialised();
 
-class AmgKrylovSolver {
+class PetscKrylovSolver {
  public:
   /// @param nodes #nodes by 3 [m]: unknowns 3i..3i+2 belong to node i; they give the rigid-body modes.
   ///        Copied.
@@ -30,14 +31,16 @@ class AmgKrylovSolver {
   ///        before the options string, which may override them.
   /// @param drop_tolerance  > 0: the preconditioner is built from a copy of each matrix without its small
   ///        off-node entries (|a_ij| < drop_tolerance sqrt(|a_ii a_jj|)); the Krylov method applies the matrix
-  ///        itself. 0: from the matrix itself. See EfgOptions::amg_preconditioner_drop_tolerance.
+  ///        itself. 0: from the matrix itself. See EfgOptions::preconditioner_drop_tolerance.
   /// Throws std::logic_error when PETSc is not initialised, std::runtime_error when PETSc rejects an option,
-  /// std::invalid_argument for a negative drop_tolerance.
-  AmgKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,
+  /// std::invalid_argument for a negative drop_tolerance, and for options PETSc's Eisenstat preconditioner cannot
+  /// serve: a drop tolerance (its trick applies the preconditioner's matrix as the operator, so a sparser copy would
+  /// solve another system) or a relaxation factor other than 1 (PETSc 3.18 crashes in it on this matrix format).
+  PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,
                   int max_iterations, double drop_tolerance = 0.0);
-  ~AmgKrylovSolver();
-  AmgKrylovSolver(const AmgKrylovSolver&) = delete;
-  AmgKrylovSolver& operator=(const AmgKrylovSolver&) = delete;
+  ~PetscKrylovSolver();
+  PetscKrylovSolver(const PetscKrylovSolver&) = delete;
+  PetscKrylovSolver& operator=(const PetscKrylovSolver&) = delete;
 
   /// Use `a` (3N by 3N, compressed, sorted column indices) from now on and build the multigrid hierarchy for
   /// it (or for its sparser copy, with a drop tolerance). The arrays of `a` are referenced, not copied: `a` must
