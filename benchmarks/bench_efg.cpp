@@ -12,8 +12,9 @@
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::krylov_options
 //    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5);
 //    all with PCML's own level smoother (one SSOR sweep); `ml` at 2k and 8k nodes is the earlier default;
-//  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_KRYLOV_OPTIONS, and the drop tolerance of the
-//    preconditioner's matrix from EFG_DROP_TOLERANCE (the surveys of docs/MESHLESS.md §2).
+//  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_KRYLOV_OPTIONS, with the drop tolerance of the
+//    preconditioner's matrix from EFG_DROP_TOLERANCE and the penalty factor from EFG_PENALTY_FACTOR (the surveys
+//    of docs/MESHLESS.md §2).
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
@@ -209,9 +210,9 @@ void BM_EfgPreconditioner(benchmark::State& state, const std::string& options, b
   time_solve(state, {LinearSolverKind::petsc_krylov, options, vci, d_max, penalty_factor});
 }
 
-/// Any PETSc options string, from the environment variable EFG_KRYLOV_OPTIONS, and the drop tolerance of the
-/// preconditioner's matrix from EFG_DROP_TOLERANCE (a survey of one's own options; reports an error when the options
-/// are unset).
+/// Any PETSc options string, from the environment variable EFG_KRYLOV_OPTIONS, the drop tolerance of the
+/// preconditioner's matrix from EFG_DROP_TOLERANCE and the clamp's penalty factor from EFG_PENALTY_FACTOR (a survey of
+/// one's own options; reports an error when the options are unset).
 void BM_EfgPreconditionerFromEnvironment(benchmark::State& state) {
   const char* options = std::getenv("EFG_KRYLOV_OPTIONS");
   if (!options || !*options) {
@@ -221,6 +222,9 @@ void BM_EfgPreconditionerFromEnvironment(benchmark::State& state) {
   Variant variant{LinearSolverKind::petsc_krylov, options, true, 2.0};
   // The preconditioner's matrix: the tangent itself by default; EFG_DROP_TOLERANCE=0.01 gives the sparser copy.
   if (const char* drop = std::getenv("EFG_DROP_TOLERANCE"); drop && *drop) variant.drop_tolerance = std::stod(drop);
+  // The penalty factor of the clamp (eq. 23; 1000 by default), which sets much of the iteration count.
+  if (const char* penalty = std::getenv("EFG_PENALTY_FACTOR"); penalty && *penalty)
+    variant.penalty_factor = std::stod(penalty);
   time_solve(state, variant);
 }
 
