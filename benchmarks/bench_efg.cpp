@@ -146,9 +146,7 @@ void BM_EfgSolveKrylov(benchmark::State& state) { time_solve(state, {LinearSolve
 void BM_EfgSolveMlGcr(benchmark::State& state) {
   Variant v;
   v.solver = LinearSolverKind::petsc_krylov;
-  v.krylov_options =
-      "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
-      "-mg_levels_pc_type sor";
+  v.krylov_options = meshless::kMlWithGcrSmoothersOptions;
   v.drop_tolerance = 0.01;
   time_solve(state, v);
 }

@@ -29,6 +29,14 @@ enum class LinearSolverKind {
   jacobi_bicgstab,  ///< Eigen::BiCGSTAB with a Jacobi preconditioner (the earlier fallback, kept for comparison)
 };
 
+/// The petsc_krylov options that were EfgOptions::krylov_options before SSOR by Eisenstat's trick: Trilinos ML with
+/// twenty GCR iterations (each preconditioned by SOR) smoothing every level, under FGMRES(200) because that smoother
+/// is not a fixed linear operator. Built from the tangent's sparser copy (preconditioner_drop_tolerance 0.01), it is
+/// the comparison of bench_efg's BM_EfgSolveMlGcr and of the solver tests.
+inline constexpr const char* kMlWithGcrSmoothersOptions =
+    "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
+    "-mg_levels_pc_type sor";
+
 /// Solver knobs with defaults; see docs/MESHLESS.md for the reasons behind each.
 struct EfgOptions {
   double newton_tolerance = 1e-8;  ///< ||R|| <= tol * ||external force|| (eq. 24 residual)
@@ -53,9 +61,7 @@ struct EfgOptions {
   /// behind the choice): LGMRES(100), left-preconditioned by SSOR applied through Eisenstat's trick, so that an
   /// iteration costs one pass over the tangent (two triangular sweeps) instead of a product and a sweep. SSOR-GMRES
   /// alone matched ML with Krylov level smoothers: the wide EFG rows make the ML hierarchy too coarse to help
-  /// (docs/MESHLESS.md §2, "The iterative solver"). The earlier default, kept for comparison:
-  /// "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20
-  /// -mg_levels_pc_type sor" with preconditioner_drop_tolerance 0.01.
+  /// (docs/MESHLESS.md §2, "The iterative solver"). The earlier default is kMlWithGcrSmoothersOptions.
   std::string krylov_options = "-ksp_type lgmres -ksp_gmres_restart 100 -pc_type eisenstat";
   /// > 0: the petsc_krylov solver builds its preconditioner (for example an ML hierarchy and its levels' SOR sweeps)
   /// from a copy of the tangent without its small entries: an entry a_ij is dropped when |a_ij| < this *

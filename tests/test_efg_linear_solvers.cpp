@@ -20,12 +20,6 @@
 namespace meshless {
 namespace {
 
-/// ML with GCR(20)/SOR level smoothers under FGMRES: the default of EfgOptions::krylov_options before SSOR by
-/// Eisenstat's trick, and the configuration a sparser preconditioner matrix serves.
-const std::string kMlWithGcrSmoothers =
-    "-ksp_type fgmres -ksp_gmres_restart 200 -pc_type ml -mg_levels_ksp_type gcr -mg_levels_ksp_max_it 20 "
-    "-mg_levels_pc_type sor";
-
 /// The parameters U after the last of `steps` steps of 0.1 s on the sheared box (material k as given).
 Eigen::VectorXd solve_sheared_box(int side, LinearSolverKind solver, EfgStatistics* stats = nullptr, double k = 0.0,
                                   int steps = 1, int* krylov_iterations = nullptr) {
@@ -208,7 +202,7 @@ TEST(PetscKrylovSolver, ASparserPreconditionerMatrixKeepsTheSolutionAndTheIterat
   model.assemble_system(true);
   const SparseMatrix& a = model.system_matrix();
   const Eigen::VectorXd b = a * Eigen::VectorXd::Ones(a.rows());
-  const std::string options = kMlWithGcrSmoothers;
+  const std::string options = kMlWithGcrSmoothersOptions;
   PetscKrylovSolver whole(model.nodes(), options, 1e-10, 5000, 0.0);
   whole.set_matrix(a);
   const Eigen::VectorXd x_whole = whole.solve(b);
@@ -246,7 +240,7 @@ TEST(PetscKrylovSolver, EisenstatSsorReachesTheToleranceInTheTrueResidual) {
   PetscKrylovSolver eisenstat(model.nodes(), EfgOptions{}.krylov_options, 1e-9, 5000);
   eisenstat.set_matrix(a);
   const Eigen::VectorXd x = eisenstat.solve(b);
-  PetscKrylovSolver ml(model.nodes(), kMlWithGcrSmoothers, 1e-9, 5000, 0.01);
+  PetscKrylovSolver ml(model.nodes(), kMlWithGcrSmoothersOptions, 1e-9, 5000, 0.01);
   ml.set_matrix(a);
   const Eigen::VectorXd x_ml = ml.solve(b);
   const double residual = (a * x - b).norm() / b.norm();
