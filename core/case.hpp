@@ -76,8 +76,8 @@ struct CutSpec {
 struct MeshlessSpec {
   double node_spacing = 0.012;  ///< [m] target spacing of the node cloud
   /// d_max: rho_i = d_max * distance to the k-th nearest node. 1.5 would couple each node to about 0.4x as many
-  /// and cut the iterations of the ML-preconditioned Krylov solve about tenfold, but it fails the cantilever's convergence test
-  /// (docs/MESHLESS.md §2, "Support size"), so the default stays 2.
+  /// and cut the iterations of the ML-preconditioned Krylov solve about tenfold, but it fails the cantilever's
+  /// convergence test (docs/MESHLESS.md §2, "Support size"), so the default stays 2.
   double support_factor = 2.0;
   int support_neighbours = 6;   ///< k
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron

@@ -21,9 +21,9 @@ class EfgLinearSolver {
   /// Chooses the method for the matrices of `sparsity` (options.linear_solver; automatic: the direct solver
   /// when the estimated peak memory of its LU (meshless/direct_solver_estimate.hpp) is below
   /// options.direct_solver_memory_fraction of available_memory(), else petsc_krylov). `nodes` (#nodes by 3, m)
-  /// give the rigid-body modes of a multigrid preconditioner. `name` labels error messages (the problem). No argument is
-  /// referenced after construction. Throws std::logic_error when petsc_krylov is chosen and PETSc is not
-  /// initialised.
+  /// give the rigid-body modes of a multigrid preconditioner. `name` labels error messages (the problem). No
+  /// argument is referenced after construction. Throws std::logic_error when petsc_krylov is chosen and PETSc is
+  /// not initialised.
   EfgLinearSolver(const EfgOptions& options, const NodalSparsity& sparsity, const core::PointMatrix& nodes,
                   std::string name);
   ~EfgLinearSolver();

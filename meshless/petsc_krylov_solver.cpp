@@ -65,7 +65,7 @@ struct PetscKrylovSolver::Petsc {
 };
 
 PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options,
-                                 double relative_tolerance, int max_iterations, double drop_tolerance)
+                                     double relative_tolerance, int max_iterations, double drop_tolerance)
     : petsc_(std::make_unique<Petsc>()), drop_tolerance_(drop_tolerance) {
   if (!(drop_tolerance >= 0.0))
     throw std::invalid_argument(
@@ -106,7 +106,8 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
   // Eisenstat's trick applies SSOR of the preconditioner's matrix through a transformed operator built from that
   // same matrix: with a sparser copy the Krylov method would converge to the copy's solution, not the tangent's.
   PetscBool eisenstat = PETSC_FALSE;
-  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(pc), PCEISENSTAT, &eisenstat), "PetscObjectTypeCompare");
+  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(pc), PCEISENSTAT, &eisenstat),
+        "PetscObjectTypeCompare");
   if (eisenstat) {
     if (drop_tolerance > 0.0)
       throw std::invalid_argument(fmt::format(
@@ -118,9 +119,9 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
     check(PCEisenstatGetOmega(pc, &omega), "PCEisenstatGetOmega");
     if (omega != 1.0)
       throw std::invalid_argument(fmt::format(
-          "PetscKrylovSolver: -pc_eisenstat_omega {:g}: PETSc 3.18's Eisenstat preconditioner crashes with a relaxation "
-          "factor other than 1 on this matrix format (in MatMultDiagonalBlock_SeqAIJ_Inode); leave it at 1, or use "
-          "-pc_type sor -pc_sor_omega {:g}",
+          "PetscKrylovSolver: -pc_eisenstat_omega {:g}: PETSc 3.18's Eisenstat preconditioner crashes with a "
+          "relaxation factor other than 1 on this matrix format (in MatMultDiagonalBlock_SeqAIJ_Inode); leave it at "
+          "1, or use -pc_type sor -pc_sor_omega {:g}",
           omega, omega));
   }
 }
@@ -130,8 +131,9 @@ PetscKrylovSolver::~PetscKrylovSolver() = default;
 void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
   Petsc& p = *petsc_;
   if (a.rows() != p.n || a.cols() != p.n || !a.isCompressed())
-    throw std::invalid_argument(fmt::format("PetscKrylovSolver::set_matrix: expected a compressed {} x {} matrix, got {} x {}",
-                                            p.n, p.n, a.rows(), a.cols()));
+    throw std::invalid_argument(fmt::format(
+        "PetscKrylovSolver::set_matrix: expected a compressed {} x {} matrix, got {} x {}", p.n, p.n, a.rows(),
+        a.cols()));
   const auto t0 = std::chrono::steady_clock::now();
   if (p.a) check(MatDestroy(&p.a), "MatDestroy");
   // PETSc's AIJ format is CSR: reference the arrays (a 32k-node tangent is 1.25 GB).

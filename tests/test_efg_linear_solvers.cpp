@@ -65,7 +65,8 @@ TEST(EfgLinearSolvers, AutomaticChoiceFallsBackOnTheKrylovSolverWhenTheLuDoesNot
   EfgModel model(sheared_box_problem(5), options);
   model.setup_system();
   const StepRecord r = model.solve_step(1);
-  EXPECT_EQ(model.statistics().linear_solver.rfind("PETSc lgmres + eisenstat", 0), 0u) << model.statistics().linear_solver;
+  EXPECT_EQ(model.statistics().linear_solver.rfind("PETSc lgmres + eisenstat", 0), 0u)
+      << model.statistics().linear_solver;
   EXPECT_GT(r.linear_iterations, 0);
   EXPECT_LE(r.residuals.back(), 1e-8);
 }
@@ -245,7 +246,8 @@ TEST(PetscKrylovSolver, EisenstatSsorReachesTheToleranceInTheTrueResidual) {
   const Eigen::VectorXd x_ml = ml.solve(b);
   const double residual = (a * x - b).norm() / b.norm();
   std::cout << "10^3 sheared box: " << eisenstat.description() << ": " << eisenstat.last_iterations()
-            << " iterations, true relative residual " << residual << "; ML with GCR smoothers: " << ml.last_iterations()
+            << " iterations, true relative residual " << residual
+            << "; ML with GCR smoothers: " << ml.last_iterations()
             << " iterations; relative parameter errors " << (x - exact).norm() / exact.norm() << " and "
             << (x_ml - exact).norm() / exact.norm() << "\n";
   EXPECT_EQ(eisenstat.description(), "PETSc lgmres + eisenstat");
@@ -387,8 +389,8 @@ TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
 }  // namespace meshless
 
 int main(int argc, char** argv) {
-  // The Krylov solver runs on PETSc and the direct solver on MUMPS, which need MPI and PETSc initialised; only the program name is
-  // passed on, so that PETSc does not read GoogleTest's flags.
+  // The Krylov solver runs on PETSc and the direct solver on MUMPS, which need MPI and PETSc initialised; only the
+  // program name is passed on, so that PETSc does not read GoogleTest's flags.
   int petsc_argc = 1;
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
   ::testing::InitGoogleTest(&argc, argv);
