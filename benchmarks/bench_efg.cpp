@@ -13,8 +13,10 @@
 //    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5);
 //    all with PCML's own level smoother (one SSOR sweep); `ml` at 2k and 8k nodes is the earlier default;
 //  * BM_EfgPreconditionerFromEnvironment: any PETSc options, from EFG_KRYLOV_OPTIONS, with the drop tolerance of the
-//    preconditioner's matrix from EFG_DROP_TOLERANCE and the penalty factor from EFG_PENALTY_FACTOR (the surveys
-//    of docs/MESHLESS.md §2).
+//    preconditioner's matrix from EFG_DROP_TOLERANCE, the penalty factor from EFG_PENALTY_FACTOR and the box's
+//    node numbering from EFG_NODE_ORDER (the surveys of docs/MESHLESS.md §2).
+// Under `mpirun -np N` (scripts/run_benchmarks.sh with EFG_BENCH_PROCESSES=N) every process builds the model and
+// the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); rank 0 reports.
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
@@ -29,6 +31,7 @@
 #include "benchmarks/mpi_benchmark_main.hpp"
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include "core/mesh_ordering.hpp"
 #include "meshless/efg_linear_solver.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/verification_problems.hpp"
@@ -53,10 +56,12 @@ struct Variant {
   double d_max = 2.0;
   double penalty_factor = 1e3;
   double drop_tolerance = meshless::EfgOptions{}.preconditioner_drop_tolerance;
+  bool node_order_for_locality = false;  // the box's nodes numbered as the geometry pipeline numbers a cloud (RCM)
   bool operator!=(const Variant& o) const {
-    return std::tie(solver, krylov_options, variationally_consistent, d_max, penalty_factor, drop_tolerance) !=
-           std::tie(o.solver, o.krylov_options, o.variationally_consistent, o.d_max, o.penalty_factor,
-                    o.drop_tolerance);
+    return std::tie(solver, krylov_options, variationally_consistent, d_max, penalty_factor, drop_tolerance,
+                    node_order_for_locality) != std::tie(o.solver, o.krylov_options, o.variationally_consistent,
+                                                         o.d_max, o.penalty_factor, o.drop_tolerance,
+                                                         o.node_order_for_locality);
   }
 };
 
@@ -83,6 +88,7 @@ meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
     meshless::EfgProblem problem = meshless::sheared_box_problem(side);
     problem.support.d_max = variant.d_max;
     problem.penalty_factor = variant.penalty_factor;
+    if (variant.node_order_for_locality) core::order_for_locality(&problem.mesh);
     model = std::make_unique<meshless::EfgModel>(std::move(problem), options);
     model->setup_system();
     key_side = side;
@@ -135,7 +141,8 @@ void time_solve(benchmark::State& state, const Variant& variant) {
   state.counters["krylov_iterations"] = step.linear_iterations;
   state.counters["umfpack_peak_GB"] = st.direct_peak_memory_estimate / 1e9;
   state.counters["available_GB"] = st.available_memory / 1e9;
-  state.counters["peak_rss_GB"] = peak_memory_gb();
+  state.counters["peak_rss_GB"] = peak_memory_gb();  // of rank 0's process, under mpirun
+  state.counters["processes"] = meshless::petsc_processes();
   state.SetLabel(st.linear_solver);
 }
 
@@ -223,6 +230,10 @@ void BM_EfgPreconditionerFromEnvironment(benchmark::State& state) {
   // The penalty factor of the clamp (eq. 23; 1000 by default), which sets much of the iteration count.
   if (const char* penalty = std::getenv("EFG_PENALTY_FACTOR"); penalty && *penalty)
     variant.penalty_factor = std::stod(penalty);
+  // EFG_NODE_ORDER=rcm: the box numbered by reverse Cuthill-McKee, as core::build_geometry numbers a lung's cloud
+  // (core/mesh_ordering.hpp), instead of layer by layer from the clamp.
+  if (const char* order = std::getenv("EFG_NODE_ORDER"); order && std::string(order) == "rcm")
+    variant.node_order_for_locality = true;
   time_solve(state, variant);
 }
 

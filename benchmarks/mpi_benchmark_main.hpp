@@ -1,5 +1,5 @@
 #pragma once
-// main() of the FEM benchmark programs: MPI initialised through deal.II (the FEM runs on Trilinos/PETSc MPI
+// main() of the benchmark programs: MPI initialised through deal.II (the FEM runs on Trilinos/PETSc MPI
 // objects), every process runs the same benchmarks in lock-step (fixed iteration counts, collective solves),
 // and only rank 0 prints and writes the --benchmark_out report.
 //   build/bin/bench_fem ...                       one process
@@ -20,14 +20,16 @@ class NullReporter : public benchmark::BenchmarkReporter {
   void ReportRuns(const std::vector<Run>&) override {}
 };
 
-inline int run_benchmarks_under_mpi(int argc, char** argv) {
-  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
+/// Google Benchmark on every process in lock-step; rank 0 alone prints and writes the --benchmark_out report.
+/// MPI must be initialised. Returns main()'s exit code.
+inline int run_specified_benchmarks_on_every_process(int argc, char** argv) {
   const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   std::vector<char*> args;
   for (int i = 0; i < argc; ++i)
     if (root || std::strncmp(argv[i], "--benchmark_out", 15) != 0) args.push_back(argv[i]);
   int n = static_cast<int>(args.size());
   benchmark::Initialize(&n, args.data());
+  if (benchmark::ReportUnrecognizedArguments(n, args.data())) return 1;
   if (root) {
     benchmark::RunSpecifiedBenchmarks();
   } else {
@@ -38,18 +40,22 @@ inline int run_benchmarks_under_mpi(int argc, char** argv) {
   return 0;
 }
 
-/// main() of the one-process EFG benchmarks whose models may pick the AMG-Krylov solver (PETSc): only the program
-/// name is passed on, so that PETSc does not read Google Benchmark's flags; `before_finalize` releases anything that
-/// holds PETSc objects (a cached model) while PETSc is still initialised.
+inline int run_benchmarks_under_mpi(int argc, char** argv) {
+  dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
+  return run_specified_benchmarks_on_every_process(argc, argv);
+}
+
+/// main() of the EFG benchmarks, whose models may pick the PETSc Krylov solver: only the program name is passed on
+/// to PETSc, so that it does not read Google Benchmark's flags; `before_finalize` releases anything that holds PETSc
+/// objects (a cached model) while PETSc is still initialised. Under `mpirun -np N` every process builds the same
+/// model and the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); only rank 0 prints
+/// and writes the --benchmark_out report.
 inline int run_benchmarks_with_petsc(int argc, char** argv, const std::function<void()>& before_finalize = {}) {
   int petsc_argc = 1;
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
-  benchmark::Initialize(&argc, argv);
-  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
-  benchmark::RunSpecifiedBenchmarks();
-  benchmark::Shutdown();
+  const int code = run_specified_benchmarks_on_every_process(argc, argv);
   if (before_finalize) before_finalize();
-  return 0;
+  return code;
 }
 
 }  // namespace bench

@@ -49,7 +49,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
     peak_memory_estimate_ = e.peak_memory_bytes;
     flops_estimate_ = e.factorisation_flops;
     available_memory_ = available_memory().bytes;
-    kind_ = e.peak_memory_bytes <= options_.direct_solver_memory_fraction * available_memory_
+    kind_ = e.peak_memory_bytes <= options_.direct_solver_memory_fraction * available_memory_ &&
+                    petsc_processes() == 1
                 ? LinearSolverKind::direct
                 : LinearSolverKind::petsc_krylov;
   }
@@ -77,6 +78,10 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
 }
 
 EfgLinearSolver::~EfgLinearSolver() = default;
+
+std::pair<int, int> EfgLinearSolver::nodes_read(int num_nodes) const {
+  return krylov_ ? krylov_->owned_nodes() : std::pair<int, int>{0, num_nodes};
+}
 
 std::string EfgLinearSolver::description() const {
   switch (kind_) {

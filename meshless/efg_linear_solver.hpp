@@ -8,6 +8,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "meshless/petsc_krylov_solver.hpp"
 #include "meshless/efg_problem.hpp"
@@ -20,7 +21,9 @@ class EfgLinearSolver {
  public:
   /// Chooses the method for the matrices of `sparsity` (options.linear_solver; automatic: the direct solver
   /// when the estimated peak memory of its LU (meshless/direct_solver_estimate.hpp) is below
-  /// options.direct_solver_memory_fraction of available_memory(), else petsc_krylov). `nodes` (#nodes by 3, m)
+  /// options.direct_solver_memory_fraction of available_memory(), else petsc_krylov; always petsc_krylov under
+  /// mpirun with more than one process, whose solve is then distributed, where MUMPS would repeat one factorisation
+  /// on every process). `nodes` (#nodes by 3, m)
   /// give the rigid-body modes of a multigrid preconditioner. `name` labels error messages (the problem). No
   /// argument is referenced after construction. Throws std::logic_error when petsc_krylov is chosen and PETSc is
   /// not initialised.
@@ -56,6 +59,9 @@ class EfgLinearSolver {
   LinearSolverKind kind() const { return kind_; }
   /// Krylov iterations of the last solve (0 for the direct solver).
   int last_iterations() const { return last_iterations_; }
+  /// The nodes [first, last) whose rows of the matrix prepare() reads: all of them, except for a PETSc Krylov solve
+  /// distributed over several MPI processes (meshless/petsc_krylov_solver.hpp), which reads this process's share.
+  std::pair<int, int> nodes_read(int num_nodes) const;
   /// Seconds of the last prepare() (factorisation, or the preconditioner's set-up).
   double prepare_seconds() const { return prepare_seconds_; }
   /// The method, for reports ("MUMPS sparse LU (METIS ordering)", "PETSc lgmres + eisenstat", ...).

@@ -490,15 +490,19 @@ void EfgModel::assemble_system(bool with_matrix) {
   double* values = matrix_.valuePtr();
   const NodalSparsity& sp = *sparsity_;
   const ShapeTable& vt = volume_;
+  // The rows the linear solver reads: all, or this process's share of a distributed solve. The residual is
+  // assembled whole on every process (each runs the same Newton iterations).
+  const auto [first_row_node, end_row_node] = linear_solver_->nodes_read(n);
   // Row by row (the equations of node i): each thread owns whole rows, so no locks or atomics are needed.
   parallel_for(n, 16, [&](int i) {
+    const bool with_row = with_matrix && i >= first_row_node && i < end_row_node;
     thread_local std::vector<int> position;
     if (static_cast<int>(position.size()) != n) position.assign(n, -1);
     for (int k = sp.row_begin(i); k < sp.row_end(i); ++k) position[sp.column(k)] = k - sp.row_begin(i);
     const int len = sp.row_length(i);
     double* row[3] = {values + sp.value_index(i, 0, 0, 0), values + sp.value_index(i, 1, 0, 0),
                       values + sp.value_index(i, 2, 0, 0)};
-    if (with_matrix)
+    if (with_row)
       for (int a = 0; a < 3; ++a) std::fill(row[a], row[a] + 3 * len, 0.0);
     Eigen::Vector3d f = Eigen::Vector3d::Zero();
 
@@ -509,7 +513,7 @@ void EfgModel::assemble_system(bool with_matrix) {
       const Eigen::Vector3d g = vt.dphi.col(volume_incidence_.slots[e]) + vci_correction_.col(i);
       const Eigen::Matrix<double, 3, 6> bt = b_transpose(g);
       f.noalias() += w * (bt * stress_[q]);
-      if (!with_matrix) continue;
+      if (!with_row) continue;
       const Eigen::Matrix<double, 3, 6> gd = w * (bt * tangent_[q]);
       for (int s = vt.begin(q); s < vt.end(q); ++s) {
         const int k = position[vt.nodes[s]];
@@ -530,7 +534,7 @@ void EfgModel::assemble_system(bool with_matrix) {
       if (c == 0.0) continue;
       const double ci = c * sv.phi[surface_incidence_.slots[e]];
       f += ci * u_surface[q];
-      if (!with_matrix) continue;
+      if (!with_row) continue;
       for (int s = sv.begin(q); s < sv.end(q); ++s) {
         const int k = position[sv.nodes[s]];
         const double v = ci * sv.phi[s];

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <type_traits>
+#include <vector>
 
 namespace meshless {
 
@@ -39,6 +40,12 @@ class DefaultOptionsWhileAlive {
 
 bool petsc_initialised() { return PetscInitializeCalled == PETSC_TRUE && PetscFinalizeCalled == PETSC_FALSE; }
 
+int petsc_processes() {
+  int processes = 1;
+  if (petsc_initialised()) MPI_Comm_size(PETSC_COMM_WORLD, &processes);
+  return processes;
+}
+
 struct PetscKrylovSolver::Petsc {
   PetscOptions options = nullptr;
   KSP ksp = nullptr;
@@ -48,6 +55,15 @@ struct PetscKrylovSolver::Petsc {
   MatNullSpace rigid_body_modes = nullptr;
   Vec coordinates = nullptr, b = nullptr, x = nullptr;
   PetscInt n = 0;
+  // The processes share the rows node by node: this process owns rows [first_row, first_row + local_rows) of
+  // every matrix and vector; row_counts/row_offsets hold every process's share (for gathering the solution).
+  MPI_Comm comm = PETSC_COMM_SELF;
+  PetscInt first_row = 0, local_rows = 0;
+  std::vector<int> row_counts, row_offsets;
+  std::vector<PetscInt> local_row_starts;  // CSR row pointer of the owned rows, from 0 (distributed only)
+
+  /// A PETSc matrix of `a`'s owned rows: its arrays referenced on one process, copied when distributed.
+  Mat matrix(const SparseMatrix& a);
 
   ~Petsc() {
     // Destruction must not throw; PETSc reports its own errors here. After PetscFinalize (an object that
@@ -76,25 +92,37 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
         "PetscInitialize) at the start of main");
   Petsc& p = *petsc_;
   p.n = static_cast<PetscInt>(3 * nodes.rows());
+  const int processes = petsc_processes();
+  int rank = 0;
+  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  p.comm = processes > 1 ? PETSC_COMM_WORLD : PETSC_COMM_SELF;
+  // Whole nodes per process, as even as the count allows (a node's three rows stay together: the block size).
+  for (int r = 0; r <= processes; ++r)
+    p.row_offsets.push_back(static_cast<int>(3 * (nodes.rows() * r / processes)));
+  for (int r = 0; r < processes; ++r) p.row_counts.push_back(p.row_offsets[r + 1] - p.row_offsets[r]);
+  p.first_row = p.row_offsets[rank];
+  p.local_rows = p.row_counts[rank];
   check(PetscOptionsCreate(&p.options), "PetscOptionsCreate");
   check(PetscOptionsInsertString(p.options, petsc_options.c_str()), "PetscOptionsInsertString");
 
   // The rigid-body modes from the node positions, centred (PETSc orthonormalises them).
-  check(VecCreateSeq(PETSC_COMM_SELF, p.n, &p.coordinates), "VecCreateSeq");
+  check(VecCreateMPI(p.comm, p.local_rows, p.n, &p.coordinates), "VecCreateMPI");
   check(VecSetBlockSize(p.coordinates, 3), "VecSetBlockSize");
   {
     const Eigen::RowVector3d centre = nodes.colwise().mean();
     PetscScalar* c = nullptr;
     check(VecGetArray(p.coordinates, &c), "VecGetArray");
-    for (Eigen::Index i = 0; i < nodes.rows(); ++i)
-      for (int d = 0; d < 3; ++d) c[3 * i + d] = nodes(i, d) - centre[d];
+    for (PetscInt row = 0; row < p.local_rows; ++row) {
+      const PetscInt global = p.first_row + row;
+      c[row] = nodes(global / 3, global % 3) - centre[global % 3];
+    }
     check(VecRestoreArray(p.coordinates, &c), "VecRestoreArray");
   }
   check(MatNullSpaceCreateRigidBody(p.coordinates, &p.rigid_body_modes), "MatNullSpaceCreateRigidBody");
-  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 3, p.n, nullptr, &p.b), "VecCreateSeqWithArray");
-  check(VecCreateSeqWithArray(PETSC_COMM_SELF, 3, p.n, nullptr, &p.x), "VecCreateSeqWithArray");
+  check(VecCreateMPIWithArray(p.comm, 3, p.local_rows, p.n, nullptr, &p.b), "VecCreateMPIWithArray");
+  check(VecCreateMPIWithArray(p.comm, 3, p.local_rows, p.n, nullptr, &p.x), "VecCreateMPIWithArray");
 
-  check(KSPCreate(PETSC_COMM_SELF, &p.ksp), "KSPCreate");
+  check(KSPCreate(p.comm, &p.ksp), "KSPCreate");
   check(PetscObjectSetOptions(reinterpret_cast<PetscObject>(p.ksp), p.options), "PetscObjectSetOptions");
   PC pc = nullptr;
   check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
@@ -128,6 +156,28 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
 
 PetscKrylovSolver::~PetscKrylovSolver() = default;
 
+Mat PetscKrylovSolver::Petsc::matrix(const SparseMatrix& a) {
+  Petsc& p = *this;
+  Mat m = nullptr;
+  if (p.comm == PETSC_COMM_SELF) {
+    // PETSc's AIJ format is CSR: reference the arrays (a 32k-node tangent is 1.25 GB).
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, p.n, p.n, const_cast<PetscInt*>(a.outerIndexPtr()),
+                                    const_cast<PetscInt*>(a.innerIndexPtr()), const_cast<PetscScalar*>(a.valuePtr()),
+                                    &m),
+          "MatCreateSeqAIJWithArrays");
+  } else {
+    // The owned rows, copied by PETSc into its diagonal and off-diagonal blocks.
+    const PetscInt* starts = a.outerIndexPtr() + p.first_row;
+    p.local_row_starts.resize(static_cast<std::size_t>(p.local_rows) + 1);
+    for (PetscInt row = 0; row <= p.local_rows; ++row) p.local_row_starts[row] = starts[row] - starts[0];
+    check(MatCreateMPIAIJWithArrays(p.comm, p.local_rows, p.local_rows, p.n, p.n, p.local_row_starts.data(),
+                                    a.innerIndexPtr() + starts[0], a.valuePtr() + starts[0], &m),
+          "MatCreateMPIAIJWithArrays");
+  }
+  check(MatSetBlockSize(m, 3), "MatSetBlockSize");
+  return m;
+}
+
 void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
   Petsc& p = *petsc_;
   if (a.rows() != p.n || a.cols() != p.n || !a.isCompressed())
@@ -136,12 +186,7 @@ void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
         a.cols()));
   const auto t0 = std::chrono::steady_clock::now();
   if (p.a) check(MatDestroy(&p.a), "MatDestroy");
-  // PETSc's AIJ format is CSR: reference the arrays (a 32k-node tangent is 1.25 GB).
-  check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, p.n, p.n, const_cast<PetscInt*>(a.outerIndexPtr()),
-                                  const_cast<PetscInt*>(a.innerIndexPtr()), const_cast<PetscScalar*>(a.valuePtr()),
-                                  &p.a),
-        "MatCreateSeqAIJWithArrays");
-  check(MatSetBlockSize(p.a, 3), "MatSetBlockSize");
+  p.a = p.matrix(a);
   check(MatSetNearNullSpace(p.a, p.rigid_body_modes), "MatSetNearNullSpace");
   if (p.p) check(MatDestroy(&p.p), "MatDestroy");
   Mat preconditioner_matrix = p.a;
@@ -159,10 +204,7 @@ void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
     });
     p.sparser.makeCompressed();
     preconditioner_fill_ = static_cast<double>(p.sparser.nonZeros()) / static_cast<double>(a.nonZeros());
-    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, p.n, p.n, p.sparser.outerIndexPtr(),
-                                    p.sparser.innerIndexPtr(), p.sparser.valuePtr(), &p.p),
-          "MatCreateSeqAIJWithArrays");
-    check(MatSetBlockSize(p.p, 3), "MatSetBlockSize");
+    p.p = p.matrix(p.sparser);
     check(MatSetNearNullSpace(p.p, p.rigid_body_modes), "MatSetNearNullSpace");
     preconditioner_matrix = p.p;
   }
@@ -174,7 +216,7 @@ void PetscKrylovSolver::set_matrix(const SparseMatrix& a) {
     check(KSPGetPC(p.ksp, &pc), "KSPGetPC");
     PetscScalar* xyz = nullptr;
     check(VecGetArray(p.coordinates, &xyz), "VecGetArray");
-    const PetscErrorCode set = PCSetCoordinates(pc, 3, p.n / 3, xyz);
+    const PetscErrorCode set = PCSetCoordinates(pc, 3, p.local_rows / 3, xyz);
     check(VecRestoreArray(p.coordinates, &xyz), "VecRestoreArray");
     check(set, "PCSetCoordinates");
   }
@@ -216,8 +258,8 @@ Eigen::VectorXd PetscKrylovSolver::solve(const Eigen::VectorXd& b) {
   if (!p.a) throw std::logic_error("PetscKrylovSolver::solve before set_matrix");
   if (b.size() != p.n) throw std::invalid_argument("PetscKrylovSolver::solve: wrong right-hand side size");
   Eigen::VectorXd x = Eigen::VectorXd::Zero(p.n);
-  check(VecPlaceArray(p.b, b.data()), "VecPlaceArray");
-  check(VecPlaceArray(p.x, x.data()), "VecPlaceArray");
+  check(VecPlaceArray(p.b, b.data() + p.first_row), "VecPlaceArray");
+  check(VecPlaceArray(p.x, x.data() + p.first_row), "VecPlaceArray");
   PetscErrorCode solved = 0;
   {
     const DefaultOptionsWhileAlive own_options(p.options);
@@ -226,6 +268,10 @@ Eigen::VectorXd PetscKrylovSolver::solve(const Eigen::VectorXd& b) {
   check(VecResetArray(p.b), "VecResetArray");
   check(VecResetArray(p.x), "VecResetArray");
   check(solved, "KSPSolve");
+  if (p.comm != PETSC_COMM_SELF)  // every process returns the whole solution
+    check(MPI_Allgatherv(MPI_IN_PLACE, 0, MPI_DATATYPE_NULL, x.data(), p.row_counts.data(), p.row_offsets.data(),
+                         MPI_DOUBLE, p.comm),
+          "MPI_Allgatherv");
   PetscInt its = 0;
   KSPConvergedReason reason;
   check(KSPGetIterationNumber(p.ksp, &its), "KSPGetIterationNumber");
@@ -242,6 +288,10 @@ Eigen::VectorXd PetscKrylovSolver::solve(const Eigen::VectorXd& b) {
   return x;
 }
 
+std::pair<int, int> PetscKrylovSolver::owned_nodes() const {
+  return {static_cast<int>(petsc_->first_row / 3), static_cast<int>((petsc_->first_row + petsc_->local_rows) / 3)};
+}
+
 std::string PetscKrylovSolver::description() const {
   const Petsc& p = *petsc_;
   KSPType ksp_type = nullptr;
@@ -251,6 +301,7 @@ std::string PetscKrylovSolver::description() const {
   KSPGetPC(p.ksp, &pc);
   PCGetType(pc, &pc_type);
   std::string s = fmt::format("PETSc {} + {}", ksp_type ? ksp_type : "?", pc_type ? pc_type : "?");
+  if (p.comm != PETSC_COMM_SELF) s += fmt::format(" on {} MPI processes", p.row_counts.size());
   if (levels_ > 0) s += fmt::format(" ({} levels, operator complexity {:.2f})", levels_, operator_complexity_);
   if (drop_tolerance_ > 0.0)
     s += fmt::format(", preconditioner built from {:.0f} % of the entries (drop tolerance {:g})",

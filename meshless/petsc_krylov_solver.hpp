@@ -6,12 +6,21 @@
 // block size. PETSc stays out of this header.
 //
 // PETSc (and MPI) must be initialised before the first solver is constructed and finalised after the last
-// one is destroyed: dealii::Utilities::MPI::MPI_InitFinalize in main does both. Serial only
-// (PETSC_COMM_SELF). Not thread-safe; the PETSc calls themselves run on one thread. A solver destroyed after
-// PETSc was finalised releases nothing (its PETSc objects leak) rather than call PETSc and abort.
+// one is destroyed: dealii::Utilities::MPI::MPI_InitFinalize in main does both. Not thread-safe; the PETSc calls
+// themselves run on one thread. A solver destroyed after PETSc was finalised releases nothing (its PETSc objects
+// leak) rather than call PETSc and abort.
+//
+// Processes: with one process in PETSC_COMM_WORLD the solve is serial and references the matrix's arrays. Under
+// `mpirun -np P` it is distributed over all P processes, which must construct the same solver and call
+// set_matrix() and solve() together (collective): each owns the rows of a contiguous range of nodes
+// (owned_nodes()), copies them into PETSc's distributed matrix, and receives the whole solution. The rows of `a`
+// outside that range are never read, so the caller need not assemble them. The SSOR sweeps are then local to each
+// process (block Jacobi between them): more iterations, but each process reads only its share of the matrix, and
+// the sweeps are bound by memory bandwidth, which each core brings (docs/PERFORMANCE.md, "The iterative solve").
 #include <Eigen/Core>
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "core/tet_mesh.hpp"
 #include "meshless/nodal_sparsity.hpp"
@@ -20,6 +29,9 @@ namespace meshless {
 
 /// True once PETSc is initialised in this process (PetscInitialize or MPI_InitFinalize).
 bool petsc_initialised();
+/// The processes a PetscKrylovSolver constructed now is distributed over: those of PETSC_COMM_WORLD, 1 when PETSc
+/// is not initialised.
+int petsc_processes();
 
 class PetscKrylovSolver {
  public:
@@ -50,6 +62,9 @@ class PetscKrylovSolver {
   Eigen::VectorXd solve(const Eigen::VectorXd& b);
 
   int last_iterations() const { return last_iterations_; }
+  /// The nodes [first, last) whose rows this process owns: all of them on one process, else [N r / P, N (r + 1) / P)
+  /// (integer division) for rank r of P processes and N nodes.
+  std::pair<int, int> owned_nodes() const;
   /// Entries of the matrix the preconditioner was built from in the last set_matrix(), over those of `a` (1
   /// without a drop tolerance).
   double preconditioner_fill() const { return preconditioner_fill_; }

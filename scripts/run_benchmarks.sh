@@ -6,13 +6,14 @@
 #   BENCH_FILTER='/32/' BENCH_SUFFIX=_32k scripts/run_benchmarks.sh bench_efg
 #                                        only the matching benchmarks, into results/bench/bench_efg_32k.json
 # bench_fem runs under `mpirun -np 2` (TISSUE_BENCH_PROCESSES), so its one- and two-process figures come from
-# the same run; the others run as one process.
+# the same run; the others run as one process, except bench_efg with EFG_BENCH_PROCESSES=N: under `mpirun -np N`
+# (one OpenMP thread each), its Krylov solves distributed over the N processes.
 # Each report is written to a temporary file and moved into place only when its benchmark finished, so an
 # interrupted run never leaves a half-written report. Speed is compared as ratios within one run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if [[ "${1:-}" == "-h" || "${1:-}" == "--help" ]]; then
-  sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'
+  sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//'
   exit 0
 fi
 benches=("$@")
@@ -28,6 +29,8 @@ for b in "${benches[@]}"; do
   out="results/bench/${b}${BENCH_SUFFIX:-}.json"
   launcher=()
   [[ "$b" == bench_fem ]] && launcher=(mpirun -np "${TISSUE_BENCH_PROCESSES:-2}" --oversubscribe)
+  [[ "$b" == bench_efg && -n "${EFG_BENCH_PROCESSES:-}" ]] &&
+    launcher=(mpirun -np "$EFG_BENCH_PROCESSES" --oversubscribe -x OMP_NUM_THREADS=1)
   if "${launcher[@]}" build/bin/"$b" --benchmark_out="$tmp" --benchmark_out_format=json \
       --benchmark_filter="${BENCH_FILTER:-.}"; then
     mv "$tmp" "$out"
