@@ -1,6 +1,8 @@
 // tissue: the command-line front end of the harness (see README.md and docs/ARCHITECTURE.md).
 #include <CLI/CLI.hpp>
 #include <deal.II/base/mpi.h>
+#include <deal.II/base/multithread_info.h>
+#include <omp.h>
 #include <fmt/format.h>
 
 #include <cstring>
@@ -19,15 +21,21 @@
 #include "experiments/verify_commands.hpp"
 
 int main(int argc, char** argv) {
-  // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's AMG-Krylov
+  // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's PETSc Krylov
   // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
-  // `solve fem` is distributed: other commands would run N copies side by side.
+  // `solve fem` and `solve meshless` are distributed: other commands would run N copies side by side.
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
   const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
-  if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1 &&
-      !(argc > 2 && std::strcmp(argv[1], "solve") == 0 && std::strcmp(argv[2], "fem") == 0)) {
-    if (root) std::cerr << "error: only `tissue solve fem` runs under mpirun with more than one process\n";
-    return 2;
+  if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1) {
+    if (!(argc > 2 && std::strcmp(argv[1], "solve") == 0 &&
+          (std::strcmp(argv[2], "fem") == 0 || std::strcmp(argv[2], "meshless") == 0))) {
+      if (root)
+        std::cerr << "error: only `tissue solve fem` and `tissue solve meshless` run under mpirun with more than one "
+                     "process\n";
+      return 2;
+    }
+    // The EFG model's OpenMP loops (assembly, shape functions) get this process's share of the cores too.
+    omp_set_num_threads(static_cast<int>(dealii::MultithreadInfo::n_threads()));
   }
   CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
   app.require_subcommand(1);

@@ -129,14 +129,21 @@ int finish_meshless_run(const core::Case& c, const core::Geometry& g, double geo
 }
 
 int run_solve_meshless(const std::string& config, const std::string& out_dir) {
+  // Under mpirun every process runs this function: rank 0 meshes, prints and writes the results files; all build
+  // the same EFG model from rank 0's geometry and share its Krylov solves (meshless/petsc_krylov_solver.hpp).
+  const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   const core::Case c = core::load_case(config);
-  Progress progress("solve meshless", 3 + c.time.steps);
-  core::OutputDirectory out(out_dir);  // staged: nothing is left behind if anything below fails
+  Progress progress("solve meshless", 3 + c.time.steps, !root);
+  std::string staging;
+  // Staged: nothing is left behind if anything below fails.
+  const std::unique_ptr<core::OutputDirectory> out = stage_on_rank_zero(out_dir, &staging);
   double geometry_seconds = 0.0;
-  const core::Geometry g = build_timed_geometry(c, false, &progress, &geometry_seconds);
-  ModelResult r = solve_meshless(c, g, c.output.vtu ? out.file("displacement").string() : std::string(),
+  const core::Geometry g = reference_fem::build_on_rank_zero(
+      [&] { return build_timed_geometry(c, false, &progress, &geometry_seconds); }, MPI_COMM_WORLD);
+  ModelResult r = solve_meshless(c, g, c.output.vtu && root ? out->file("displacement").string() : std::string(),
                                  [&](const std::string& line) { progress.step(line); });
-  return finish_meshless_run(c, g, geometry_seconds, &r, &out, &progress);
+  if (!root) return 0;  // rank 0 writes the results files
+  return finish_meshless_run(c, g, geometry_seconds, &r, out.get(), &progress);
 }
 
 /// `tissue cut`: the EFG model with the case's incision made progressively, as a scalpel does (/cut/steps
@@ -174,7 +181,10 @@ void add_solve_commands(CLI::App& app) {
   fem->callback([] { throw CommandResult{run_solve_fem(fem_config, fem_out)}; });
 
   auto* efg = group->add_subcommand(
-      "meshless", "EFG meshless model: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json");
+      "meshless",
+      "EFG meshless model: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json. Under `mpirun -np "
+      "N` the PETSc Krylov solve is distributed over the N processes (for clouds too large to factorise; "
+      "docs/MESHLESS.md §2)");
   static std::string efg_config, efg_out;
   efg->add_option("CONFIG", efg_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   efg->add_option("--out", efg_out, "Output folder (written atomically)")->required();

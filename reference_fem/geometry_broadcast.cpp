@@ -27,6 +27,19 @@ void broadcast_vector(std::vector<T>* v, MPI_Comm communicator) {
   dealii::Utilities::MPI::broadcast(v->data(), v->size(), 0, communicator);
 }
 
+/// Rank 0's mesh on every process.
+void broadcast_mesh(core::TetMesh* mesh, MPI_Comm communicator) {
+  broadcast_matrix(&mesh->vertices, communicator);
+  broadcast_matrix(&mesh->tets, communicator);
+  broadcast_matrix(&mesh->boundary_faces, communicator);
+  std::vector<int> tag_values(mesh->face_tags.size());
+  for (std::size_t i = 0; i < tag_values.size(); ++i) tag_values[i] = static_cast<int>(mesh->face_tags[i]);
+  broadcast_vector(&tag_values, communicator);
+  mesh->face_tags.resize(tag_values.size());
+  for (std::size_t i = 0; i < tag_values.size(); ++i) mesh->face_tags[i] = static_cast<core::FaceTag>(tag_values[i]);
+  broadcast_vector(&mesh->vertex_fixed, communicator);
+}
+
 enum class Outcome : int { built = 0, case_error = 1, other_error = 2 };
 
 }  // namespace
@@ -66,16 +79,8 @@ core::Geometry build_on_rank_zero(const std::function<core::Geometry()>& build, 
     throw std::runtime_error(error[0]);
   }
 
-  core::TetMesh& mesh = g.fem_mesh;
-  broadcast_matrix(&mesh.vertices, communicator);
-  broadcast_matrix(&mesh.tets, communicator);
-  broadcast_matrix(&mesh.boundary_faces, communicator);
-  std::vector<int> tag_values(mesh.face_tags.size());
-  for (std::size_t i = 0; i < tag_values.size(); ++i) tag_values[i] = static_cast<int>(mesh.face_tags[i]);
-  broadcast_vector(&tag_values, communicator);
-  mesh.face_tags.resize(tag_values.size());
-  for (std::size_t i = 0; i < tag_values.size(); ++i) mesh.face_tags[i] = static_cast<core::FaceTag>(tag_values[i]);
-  broadcast_vector(&mesh.vertex_fixed, communicator);
+  broadcast_mesh(&g.fem_mesh, communicator);
+  broadcast_mesh(&g.meshless_mesh, communicator);  // empty unless the build made the node cloud
   broadcast_matrix(&g.sample_points, communicator);
   std::array<double, 7> small{g.load_centre.x(), g.load_centre.y(), g.load_centre.z(), g.load_normal.x(),
                               g.load_normal.y(),  g.load_normal.z(), g.reference_volume};

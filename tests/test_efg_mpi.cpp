@@ -10,9 +10,11 @@
 #include <iostream>
 #include <string>
 
+#include "meshless/box_mesh.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/petsc_krylov_solver.hpp"
 #include "meshless/verification_problems.hpp"
+#include "reference_fem/geometry_broadcast.hpp"
 
 namespace meshless {
 namespace {
@@ -74,6 +76,29 @@ TEST(EfgMpi, AutomaticChoiceDistributesTheKrylovSolveRatherThanRepeatTheFactoris
   model.setup_system();
   model.solve_step(1);
   EXPECT_EQ(model.statistics().linear_solver, "PETSc lgmres + eisenstat on 2 MPI processes");
+}
+
+TEST(EfgMpi, EveryProcessGetsRankZerosNodeCloud) {
+  // `mpirun -np N tissue solve meshless` meshes on rank 0 alone (reference_fem::build_on_rank_zero); every process
+  // must then build the same EFG model, so the node cloud must arrive whole: vertices, cells, faces and their tags.
+  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  const EfgProblem box = sheared_box_problem(4);
+  const core::Geometry g = reference_fem::build_on_rank_zero(
+      [&] {
+        core::Geometry built;
+        built.meshless_mesh = box.mesh;
+        built.sample_points = box.mesh.vertices.topRows(2);
+        return built;
+      },
+      MPI_COMM_WORLD);
+  const core::TetMesh& m = g.meshless_mesh;
+  EXPECT_EQ(m.vertices, box.mesh.vertices);  // the same box on every process (make_box_mesh's fixed seed)
+  EXPECT_EQ(m.tets, box.mesh.tets);
+  EXPECT_EQ(m.boundary_faces, box.mesh.boundary_faces);
+  EXPECT_EQ(m.face_tags, box.mesh.face_tags);
+  EXPECT_EQ(m.vertex_fixed, box.mesh.vertex_fixed);
+  EXPECT_EQ(g.sample_points.rows(), 2);
+  EXPECT_EQ(g.fem_mesh.num_vertices(), 0);
 }
 
 }  // namespace
