@@ -16,7 +16,8 @@
 //    preconditioner's matrix from EFG_DROP_TOLERANCE, the penalty factor from EFG_PENALTY_FACTOR and the box's
 //    node numbering from EFG_NODE_ORDER (the surveys of docs/MESHLESS.md §2).
 // Under `mpirun -np N` (scripts/run_benchmarks.sh with EFG_BENCH_PROCESSES=N) every process builds the model and
-// the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); rank 0 reports.
+// the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); rank 0 reports, and
+// BM_EfgSolveKrylovOneProcess gives the one-process figure of the same run.
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
 #include <benchmark/benchmark.h>
@@ -57,11 +58,12 @@ struct Variant {
   double penalty_factor = 1e3;
   double drop_tolerance = meshless::EfgOptions{}.preconditioner_drop_tolerance;
   bool node_order_for_locality = false;  // the box's nodes numbered as the geometry pipeline numbers a cloud (RCM)
+  bool one_process = false;              // under mpirun: rank 0 solves alone (EfgOptions::distributed_krylov_solve)
   bool operator!=(const Variant& o) const {
     return std::tie(solver, krylov_options, variationally_consistent, d_max, penalty_factor, drop_tolerance,
-                    node_order_for_locality) != std::tie(o.solver, o.krylov_options, o.variationally_consistent,
-                                                         o.d_max, o.penalty_factor, o.drop_tolerance,
-                                                         o.node_order_for_locality);
+                    node_order_for_locality, one_process) !=
+           std::tie(o.solver, o.krylov_options, o.variationally_consistent, o.d_max, o.penalty_factor,
+                    o.drop_tolerance, o.node_order_for_locality, o.one_process);
   }
 };
 
@@ -84,6 +86,7 @@ meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
     options.linear_solver = variant.solver;
     options.variationally_consistent = variant.variationally_consistent;
     options.preconditioner_drop_tolerance = variant.drop_tolerance;
+    options.distributed_krylov_solve = !variant.one_process;
     if (!variant.krylov_options.empty()) options.krylov_options = variant.krylov_options;
     meshless::EfgProblem problem = meshless::sheared_box_problem(side);
     problem.support.d_max = variant.d_max;
@@ -148,6 +151,18 @@ void time_solve(benchmark::State& state, const Variant& variant) {
 
 void BM_EfgSolve(benchmark::State& state) { time_solve(state, {}); }
 void BM_EfgSolveKrylov(benchmark::State& state) { time_solve(state, {LinearSolverKind::petsc_krylov}); }
+/// The same solve on rank 0 alone while the other processes wait: under `mpirun -np 2` the one-process figure of
+/// the same run as BM_EfgSolveKrylov's distributed one. Registered after it, so that the others have nothing left
+/// to do but wait in MPI_Finalize.
+void BM_EfgSolveKrylovOneProcess(benchmark::State& state) {
+  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) != 0) {
+    state.SkipWithError("rank 0 runs this one alone");
+    return;
+  }
+  Variant v{LinearSolverKind::petsc_krylov};
+  v.one_process = true;
+  time_solve(state, v);
+}
 /// The options EfgOptions::krylov_options had before SSOR by Eisenstat's trick: ML with GCR(20)/SOR level smoothers,
 /// the hierarchy and the sweeps built from the tangent's sparser copy (drop tolerance 0.01), under FGMRES(200).
 void BM_EfgSolveMlGcr(benchmark::State& state) {
@@ -282,6 +297,9 @@ BENCHMARK_CAPTURE(BM_EfgPreconditioner, dmax_1_5_ml, kGmres + "-pc_type ml", tru
 
 // EFG_KRYLOV_OPTIONS='...' BENCH_FILTER='BM_EfgPreconditionerFromEnvironment/13/' scripts/run_benchmarks.sh bench_efg
 BENCHMARK(BM_EfgPreconditionerFromEnvironment)->Arg(10)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
+// Last, so that under mpirun the processes other than rank 0 have finished everything else (see above):
+// EFG_BENCH_PROCESSES=2 BENCH_FILTER='BM_EfgSolveKrylov(OneProcess)?/(13|20|32)/' scripts/run_benchmarks.sh bench_efg
+BENCHMARK(BM_EfgSolveKrylovOneProcess)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 int main(int argc, char** argv) {
   return bench::run_benchmarks_with_petsc(argc, argv, [] {

@@ -50,7 +50,7 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
     flops_estimate_ = e.factorisation_flops;
     available_memory_ = available_memory().bytes;
     kind_ = e.peak_memory_bytes <= options_.direct_solver_memory_fraction * available_memory_ &&
-                    petsc_processes() == 1
+                    (petsc_processes() == 1 || !options_.distributed_krylov_solve)
                 ? LinearSolverKind::direct
                 : LinearSolverKind::petsc_krylov;
   }
@@ -70,7 +70,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
                 : std::string("PETSc Krylov")));
       krylov_ = std::make_unique<PetscKrylovSolver>(nodes, options_.krylov_options, options_.iterative_tolerance,
                                                     options_.iterative_max_iterations,
-                                                    options_.preconditioner_drop_tolerance);
+                                                    options_.preconditioner_drop_tolerance,
+                                                    options_.distributed_krylov_solve);
       break;
     case LinearSolverKind::jacobi_bicgstab: jacobi_ = std::make_unique<JacobiBicgstab>(); break;
     case LinearSolverKind::automatic: break;  // resolved above

@@ -22,8 +22,8 @@ class EfgLinearSolver {
   /// Chooses the method for the matrices of `sparsity` (options.linear_solver; automatic: the direct solver
   /// when the estimated peak memory of its LU (meshless/direct_solver_estimate.hpp) is below
   /// options.direct_solver_memory_fraction of available_memory(), else petsc_krylov; always petsc_krylov under
-  /// mpirun with more than one process, whose solve is then distributed, where MUMPS would repeat one factorisation
-  /// on every process). `nodes` (#nodes by 3, m)
+  /// mpirun with more than one process and options.distributed_krylov_solve, whose solve is then distributed, where
+  /// MUMPS would repeat one factorisation on every process). `nodes` (#nodes by 3, m)
   /// give the rigid-body modes of a multigrid preconditioner. `name` labels error messages (the problem). No
   /// argument is referenced after construction. Throws std::logic_error when petsc_krylov is chosen and PETSc is
   /// not initialised.

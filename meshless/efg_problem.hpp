@@ -74,6 +74,11 @@ struct EfgOptions {
   /// costs Newton iterations: 1e-9 lets one Newton iteration finish an elastic step at newton_tolerance 1e-8.
   double iterative_tolerance = 1e-9;
   int iterative_max_iterations = 20000;
+  /// Under mpirun with more than one process: distribute the petsc_krylov solve over all of them (every process
+  /// must then build the same model and step it in lock-step; meshless/petsc_krylov_solver.hpp), and let the
+  /// automatic choice take it rather than repeat one factorisation on every process. false: each process solves
+  /// alone, as with one process. No effect with one process.
+  bool distributed_krylov_solve = true;
 };
 
 struct EfgProblem {

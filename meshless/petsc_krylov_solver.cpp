@@ -81,7 +81,8 @@ struct PetscKrylovSolver::Petsc {
 };
 
 PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options,
-                                     double relative_tolerance, int max_iterations, double drop_tolerance)
+                                     double relative_tolerance, int max_iterations, double drop_tolerance,
+                                     bool distributed)
     : petsc_(std::make_unique<Petsc>()), drop_tolerance_(drop_tolerance) {
   if (!(drop_tolerance >= 0.0))
     throw std::invalid_argument(
@@ -92,9 +93,9 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
         "PetscInitialize) at the start of main");
   Petsc& p = *petsc_;
   p.n = static_cast<PetscInt>(3 * nodes.rows());
-  const int processes = petsc_processes();
+  const int processes = distributed ? petsc_processes() : 1;
   int rank = 0;
-  MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
+  if (processes > 1) MPI_Comm_rank(PETSC_COMM_WORLD, &rank);
   p.comm = processes > 1 ? PETSC_COMM_WORLD : PETSC_COMM_SELF;
   // Whole nodes per process, as even as the count allows (a node's three rows stay together: the block size).
   for (int r = 0; r <= processes; ++r)

@@ -10,8 +10,8 @@
 // themselves run on one thread. A solver destroyed after PETSc was finalised releases nothing (its PETSc objects
 // leak) rather than call PETSc and abort.
 //
-// Processes: with one process in PETSC_COMM_WORLD the solve is serial and references the matrix's arrays. Under
-// `mpirun -np P` it is distributed over all P processes, which must construct the same solver and call
+// Processes: with one process in PETSC_COMM_WORLD (or `distributed` false) the solve is serial and references the
+// matrix's arrays. Under `mpirun -np P` it is distributed over all P processes, which must construct the same solver and call
 // set_matrix() and solve() together (collective): each owns the rows of a contiguous range of nodes
 // (owned_nodes()), copies them into PETSc's distributed matrix, and receives the whole solution. The rows of `a`
 // outside that range are never read, so the caller need not assemble them. The SSOR sweeps are then local to each
@@ -48,8 +48,10 @@ class PetscKrylovSolver {
   /// std::invalid_argument for a negative drop_tolerance, and for options PETSc's Eisenstat preconditioner cannot
   /// serve: a drop tolerance (its trick applies the preconditioner's matrix as the operator, so a sparser copy would
   /// solve another system) or a relaxation factor other than 1 (PETSc 3.18 crashes in it on this matrix format).
+  /// @param distributed  with more than one process in PETSC_COMM_WORLD: distribute the solve over them (below);
+  ///        false: solve on this process alone.
   PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,
-                  int max_iterations, double drop_tolerance = 0.0);
+                    int max_iterations, double drop_tolerance = 0.0, bool distributed = true);
   ~PetscKrylovSolver();
   PetscKrylovSolver(const PetscKrylovSolver&) = delete;
   PetscKrylovSolver& operator=(const PetscKrylovSolver&) = delete;
