@@ -144,8 +144,8 @@ void time_solve(benchmark::State& state, const Variant& variant) {
   state.counters["krylov_iterations"] = step.linear_iterations;
   state.counters["umfpack_peak_GB"] = st.direct_peak_memory_estimate / 1e9;
   state.counters["available_GB"] = st.available_memory / 1e9;
-  state.counters["peak_rss_GB"] = peak_memory_gb();  // of rank 0's process, under mpirun
-  state.counters["processes"] = meshless::petsc_processes();
+  state.counters["peak_rss_GB"] = peak_memory_gb();  // of rank 0's process so far, under mpirun
+  state.counters["processes"] = variant.one_process ? 1 : meshless::petsc_processes();  // that the solve ran on
   state.SetLabel(st.linear_solver);
 }
 
