@@ -10,13 +10,14 @@
 // themselves run on one thread. A solver destroyed after PETSc was finalised releases nothing (its PETSc objects
 // leak) rather than call PETSc and abort.
 //
-// Processes: with one process in PETSC_COMM_WORLD (or `distributed` false) the solve is serial and references the
-// matrix's arrays. Under `mpirun -np P` it is distributed over all P processes, which must construct the same solver and call
-// set_matrix() and solve() together (collective): each owns the rows of a contiguous range of nodes
+// Processes: with one process in PETSC_COMM_WORLD (or `distributed` false) the solve is serial and references
+// the matrix's arrays. Under `mpirun -np P` it is distributed over all P processes, which must construct the same
+// solver and call set_matrix() and solve() together (collective). Each owns the rows of a contiguous range of nodes
 // (owned_nodes()), copies them into PETSc's distributed matrix, and receives the whole solution. The rows of `a`
-// outside that range are never read, so the caller need not assemble them. The SSOR sweeps are then local to each
-// process (block Jacobi between them): more iterations, but each process reads only its share of the matrix, and
-// the sweeps are bound by memory bandwidth, which each core brings (docs/PERFORMANCE.md, "The iterative solve").
+// outside that range are never read, so the caller need not assemble them. The SSOR sweeps are then local to
+// each process (block Jacobi between them): more iterations, but each process reads only its share of the
+// matrix, and the sweeps are bound by memory bandwidth, which each core brings (docs/PERFORMANCE.md, "The
+// iterative solve").
 #include <Eigen/Core>
 #include <memory>
 #include <string>

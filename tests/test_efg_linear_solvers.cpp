@@ -16,31 +16,10 @@
 #include "meshless/efg_model.hpp"
 #include "meshless/mumps_lu.hpp"
 #include "meshless/verification_problems.hpp"
+#include "tests/sheared_box_runs.hpp"
 
 namespace meshless {
 namespace {
-
-/// The parameters U after the last of `steps` steps of 0.1 s on the sheared box (material k as given).
-Eigen::VectorXd solve_sheared_box(int side, LinearSolverKind solver, EfgStatistics* stats = nullptr, double k = 0.0,
-                                  int steps = 1, int* krylov_iterations = nullptr) {
-  EfgOptions options;
-  options.linear_solver = solver;
-  EfgProblem problem = sheared_box_problem(side);
-  problem.material.k = k;
-  problem.step_times.clear();
-  for (int s = 0; s < steps; ++s) problem.step_times.push_back(0.1 * s);  // elastic first step, then creep
-  EfgModel model(std::move(problem), options);
-  model.setup_system();
-  int iterations = 0;
-  for (int s = 1; s <= steps; ++s) {
-    const StepRecord r = model.solve_step(s);
-    EXPECT_LE(r.residuals.back(), 1e-8);  // solve_step throws when Newton fails
-    iterations += r.linear_iterations;
-  }
-  if (stats) *stats = model.statistics();
-  if (krylov_iterations) *krylov_iterations = iterations;
-  return model.nodal_parameters();
-}
 
 TEST(EfgLinearSolvers, AutomaticChoiceFactorisesSmallCloudsAndReportsTheEstimate) {
   EfgStatistics small, larger;

@@ -8,42 +8,16 @@
 #include <mpi.h>
 
 #include <iostream>
-#include <string>
 
 #include "meshless/box_mesh.hpp"
 #include "meshless/efg_model.hpp"
 #include "meshless/petsc_krylov_solver.hpp"
 #include "meshless/verification_problems.hpp"
 #include "reference_fem/geometry_broadcast.hpp"
+#include "tests/sheared_box_runs.hpp"
 
 namespace meshless {
 namespace {
-
-struct BoxRun {
-  Eigen::VectorXd parameters;  // U after the last step
-  std::string solver;          // EfgStatistics::linear_solver
-  int krylov_iterations = 0;
-};
-
-/// The 8^3 sheared box with k = 2, an elastic step and two creep steps of 0.1 s.
-BoxRun solve_nonlinear_box(LinearSolverKind kind) {
-  EfgOptions options;
-  options.linear_solver = kind;
-  EfgProblem problem = sheared_box_problem(8);
-  problem.material.k = 2.0;
-  problem.step_times = {0.0, 0.1, 0.2};
-  EfgModel model(std::move(problem), options);
-  model.setup_system();
-  BoxRun run;
-  for (int s = 1; s <= 3; ++s) {
-    const StepRecord r = model.solve_step(s);
-    EXPECT_LE(r.residuals.back(), 1e-8);  // solve_step throws when Newton fails
-    run.krylov_iterations += r.linear_iterations;
-  }
-  run.parameters = model.nodal_parameters();
-  run.solver = model.statistics().linear_solver;
-  return run;
-}
 
 /// Largest |a - b| over the processes, with b rank 0's vector.
 double largest_difference_from_rank_zero(const Eigen::VectorXd& a) {
@@ -56,17 +30,21 @@ double largest_difference_from_rank_zero(const Eigen::VectorXd& a) {
 
 TEST(EfgMpi, DistributedKrylovSolveReachesTheDirectSolutionWithNonzeroK) {
   if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
-  const BoxRun direct = solve_nonlinear_box(LinearSolverKind::direct);  // MUMPS on each process alone
-  const BoxRun distributed = solve_nonlinear_box(LinearSolverKind::petsc_krylov);
-  const double difference = (distributed.parameters - direct.parameters).norm() / direct.parameters.norm();
+  // The 8^3 box with k = 2: an elastic step and two creep steps of 0.1 s.
+  const Eigen::VectorXd direct = solve_sheared_box(8, LinearSolverKind::direct, nullptr, 2.0, 3);  // MUMPS, alone
+  EfgStatistics stats;
+  int iterations = 0;
+  const Eigen::VectorXd distributed =
+      solve_sheared_box(8, LinearSolverKind::petsc_krylov, &stats, 2.0, 3, &iterations);
+  const double difference = (distributed - direct).norm() / direct.norm();
   if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0)
-    std::cout << "8^3 sheared box, k = 2, three steps: " << distributed.solver << ", " << distributed.krylov_iterations
+    std::cout << "8^3 sheared box, k = 2, three steps: " << stats.linear_solver << ", " << iterations
               << " iterations; relative difference from MUMPS " << difference << "\n";
-  EXPECT_EQ(distributed.solver, "PETSc lgmres + eisenstat on 2 MPI processes");
+  EXPECT_EQ(stats.linear_solver, "PETSc lgmres + eisenstat on 2 MPI processes");
   // Both stop at Newton's tolerance 1e-8 by different Newton paths: measured 1.2e-11.
   EXPECT_LT(difference, 1e-10);
   // Every process returns the whole solution and runs the same Newton iterations from it.
-  EXPECT_EQ(largest_difference_from_rank_zero(distributed.parameters), 0.0);
+  EXPECT_EQ(largest_difference_from_rank_zero(distributed), 0.0);
 }
 
 TEST(EfgMpi, AutomaticChoiceDistributesTheKrylovSolveRatherThanRepeatTheFactorisation) {
