@@ -72,6 +72,18 @@ std::runtime_error with_support_hint(const meshless::SingularMomentMatrix& e, co
       e.what(), c.cut ? ", on its side of the cut" : "", c.meshless.support_factor, c.meshless.node_spacing * 1e3));
 }
 
+bool is_direct(const meshless::EfgStatistics& st) {
+  return st.linear_solver_kind == meshless::LinearSolverKind::direct ||
+         st.linear_solver_kind == meshless::LinearSolverKind::direct_umfpack;
+}
+
+/// The linear solves' work in a step, in the solver's own terms: factorisations, or Krylov iterations and
+/// preconditioner set-ups.
+std::string linear_work(const meshless::StepRecord& rec, const meshless::EfgStatistics& st) {
+  if (is_direct(st)) return fmt::format("{} factorisations", rec.factorisations);
+  return fmt::format("{} Krylov iterations, {} preconditioner set-ups", rec.linear_iterations, rec.factorisations);
+}
+
 }  // namespace
 
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
@@ -140,9 +152,11 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                        rec.newton_iterations, rec.residuals, rec.linear_iterations, rec.substeps,
                        rec.failed_attempts, rec.admissibility_margin});
     if (on_step)
-      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({} factorisations), residual {:.2e}{}{}",
-                          step, n_steps, rec.time, rec.newton_iterations, rec.factorisations, rec.residuals.back(),
-                          rec.reused_factorisation ? " (factorisation reused)" : "",
+      on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({}), residual {:.2e}{}{}", step, n_steps,
+                          rec.time, rec.newton_iterations, linear_work(rec, st), rec.residuals.back(),
+                          !rec.reused_factorisation ? ""
+                          : is_direct(st)           ? " (factorisation reused)"
+                                                    : " (preconditioner reused)",
                           rec.cutbacks > 0 ? fmt::format(", {} cut-backs into {} sub-steps", rec.cutbacks, rec.substeps)
                                            : std::string()));
   }

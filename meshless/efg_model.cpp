@@ -168,6 +168,7 @@ void EfgModel::build_couplings(bool new_pattern) {
     linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, mesh.vertices, problem_.name);
     timings_.setup_seconds += seconds_since(t_choice);
     stats_.linear_solver = linear_solver_->description();
+    stats_.linear_solver_kind = linear_solver_->kind();
     stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
     stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
     stats_.available_memory = linear_solver_->available_memory_bytes();

@@ -81,6 +81,8 @@ struct EfgStatistics {
   double alpha = 0.0;                 ///< penalty parameter [Pa/m]
   double penalised_area = 0.0, loaded_area = 0.0;  ///< [m^2]
   std::string linear_solver;
+  /// The method behind linear_solver: direct, direct_umfpack, petsc_krylov or jacobi_bicgstab (never automatic).
+  LinearSolverKind linear_solver_kind = LinearSolverKind::direct;
   /// Predicted cost of factorising this matrix (meshless/direct_solver_estimate.hpp; automatic solver choice
   /// only, 0 when not estimated).
   double direct_peak_memory_estimate = 0.0;  ///< [bytes]
