@@ -103,6 +103,12 @@ PetscKrylovSolver::PetscKrylovSolver(const core::PointMatrix& nodes, const std::
   for (int r = 0; r < processes; ++r) p.row_counts.push_back(p.row_offsets[r + 1] - p.row_offsets[r]);
   p.first_row = p.row_offsets[rank];
   p.local_rows = p.row_counts[rank];
+  if (processes > 1 && drop_tolerance > 0.0)
+    throw std::invalid_argument(fmt::format(
+        "PetscKrylovSolver: a drop tolerance ({:g}, EfgOptions::preconditioner_drop_tolerance) compares each entry "
+        "with the diagonal of both its rows, but a solve distributed over {} processes has only this process's rows "
+        "assembled: set it to 0, or solve on each process alone (EfgOptions::distributed_krylov_solve = false)",
+        drop_tolerance, processes));
   check(PetscOptionsCreate(&p.options), "PetscOptionsCreate");
   check(PetscOptionsInsertString(p.options, petsc_options.c_str()), "PetscOptionsInsertString");
 

@@ -48,7 +48,8 @@ class PetscKrylovSolver {
   /// Throws std::logic_error when PETSc is not initialised, std::runtime_error when PETSc rejects an option,
   /// std::invalid_argument for a negative drop_tolerance, and for options PETSc's Eisenstat preconditioner cannot
   /// serve: a drop tolerance (its trick applies the preconditioner's matrix as the operator, so a sparser copy would
-  /// solve another system) or a relaxation factor other than 1 (PETSc 3.18 crashes in it on this matrix format).
+  /// solve another system) or a relaxation factor other than 1 (PETSc 3.18 crashes in it on this matrix format); and
+  /// for a drop tolerance in a distributed solve (the other processes' diagonal entries are not assembled here).
   /// @param distributed  with more than one process in PETSC_COMM_WORLD: distribute the solve over them (below);
   ///        false: solve on this process alone.
   PetscKrylovSolver(const core::PointMatrix& nodes, const std::string& petsc_options, double relative_tolerance,

@@ -8,6 +8,8 @@
 #include <mpi.h>
 
 #include <iostream>
+#include <stdexcept>
+#include <string>
 
 #include "meshless/box_mesh.hpp"
 #include "meshless/efg_model.hpp"
@@ -54,6 +56,21 @@ TEST(EfgMpi, AutomaticChoiceDistributesTheKrylovSolveRatherThanRepeatTheFactoris
   model.setup_system();
   model.solve_step(1);
   EXPECT_EQ(model.statistics().linear_solver, "PETSc lgmres + eisenstat on 2 MPI processes");
+}
+
+TEST(EfgMpi, DistributedSolveRefusesADropToleranceAndSaysWhatToChange) {
+  // The sparser preconditioner copy compares each entry with the diagonal of both its rows; a distributed solve
+  // assembles only this process's rows, so the others' diagonal is not there to compare with.
+  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  const core::PointMatrix nodes = sheared_box_problem(3).mesh.vertices;
+  try {
+    PetscKrylovSolver solver(nodes, kMlWithGcrSmoothersOptions, 1e-9, 100, 0.01);
+    FAIL() << "a drop tolerance was accepted by a distributed solve";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("distributed_krylov_solve = false"), std::string::npos) << e.what();
+  }
+  // On each process alone it is accepted.
+  EXPECT_NO_THROW(PetscKrylovSolver(nodes, kMlWithGcrSmoothersOptions, 1e-9, 100, 0.01, /*distributed=*/false));
 }
 
 TEST(EfgMpi, EveryProcessGetsRankZerosNodeCloud) {
