@@ -60,7 +60,6 @@ struct PetscKrylovSolver::Petsc {
   MPI_Comm comm = PETSC_COMM_SELF;
   PetscInt first_row = 0, local_rows = 0;
   std::vector<int> row_counts, row_offsets;
-  std::vector<PetscInt> local_row_starts;  // CSR row pointer of the owned rows, from 0 (distributed only)
 
   /// A PETSc matrix of `a`'s owned rows: its arrays referenced on one process, copied when distributed.
   Mat matrix(const SparseMatrix& a);
@@ -175,9 +174,9 @@ Mat PetscKrylovSolver::Petsc::matrix(const SparseMatrix& a) {
   } else {
     // The owned rows, copied by PETSc into its diagonal and off-diagonal blocks.
     const PetscInt* starts = a.outerIndexPtr() + p.first_row;
-    p.local_row_starts.resize(static_cast<std::size_t>(p.local_rows) + 1);
-    for (PetscInt row = 0; row <= p.local_rows; ++row) p.local_row_starts[row] = starts[row] - starts[0];
-    check(MatCreateMPIAIJWithArrays(p.comm, p.local_rows, p.local_rows, p.n, p.n, p.local_row_starts.data(),
+    std::vector<PetscInt> local_row_starts(static_cast<std::size_t>(p.local_rows) + 1);  // CSR row pointer from 0
+    for (PetscInt row = 0; row <= p.local_rows; ++row) local_row_starts[row] = starts[row] - starts[0];
+    check(MatCreateMPIAIJWithArrays(p.comm, p.local_rows, p.local_rows, p.n, p.n, local_row_starts.data(),
                                     a.innerIndexPtr() + starts[0], a.valuePtr() + starts[0], &m),
           "MatCreateMPIAIJWithArrays");
   }
