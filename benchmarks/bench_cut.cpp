@@ -17,9 +17,9 @@
 #include "benchmarks/mpi_benchmark_main.hpp"
 #include "core/case.hpp"
 #include "core/geometry.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/efg_problem.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/efg/efg_problem.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace {
 

@@ -16,7 +16,7 @@
 //    preconditioner's matrix from EFG_DROP_TOLERANCE, the penalty factor from EFG_PENALTY_FACTOR and the box's
 //    node numbering from EFG_NODE_ORDER (the surveys of docs/MESHLESS.md §2).
 // Under `mpirun -np N` (scripts/run_benchmarks.sh with EFG_BENCH_PROCESSES=N) every process builds the model and
-// the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); rank 0 reports, and
+// the Krylov solves are distributed over them (meshless/solvers/petsc_krylov_solver.hpp); rank 0 reports, and
 // BM_EfgSolveKrylovOneProcess gives the one-process figure of the same run.
 // Cube clamped (penalty, eq. 23) on z = 0 and loaded by a shear traction on the top face; elastic step.
 // Shape-function tabulation and sparsity are set-up work, timed separately in BM_EfgSetup.
@@ -33,9 +33,9 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/mesh_ordering.hpp"
-#include "meshless/efg_linear_solver.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/solvers/efg_linear_solver.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace {
 

@@ -6,9 +6,9 @@
 #include <random>
 #include <vector>
 
-#include "meshless/mls_shape_functions.hpp"
-#include "meshless/node_search.hpp"
-#include "meshless/support_radii.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/mls/node_search.hpp"
+#include "meshless/mls/support_radii.hpp"
 
 namespace {
 

@@ -10,7 +10,7 @@
 //    one patch load up to the response step on a set-up model (EfgModel::restart + time steps +
 //    interpolation). For `shipped` the case named in TISSUE_SURROGATE_CASE (default
 //    configs/lung_surrogate.json) is meshed first.
-//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate_box_case.hpp),
+//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate/surrogate_box_case.hpp),
 //  with the
 //    file size.
 #include <benchmark/benchmark.h>
@@ -26,11 +26,11 @@
 #include "benchmarks/mpi_benchmark_main.hpp"
 #include "core/case.hpp"
 #include "core/geometry.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/surrogate.hpp"
-#include "meshless/surrogate_box_case.hpp"
-#include "meshless/surrogate_builder.hpp"
-#include "meshless/surrogate_file.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/surrogate/surrogate.hpp"
+#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "meshless/surrogate/surrogate_builder.hpp"
+#include "meshless/surrogate/surrogate_file.hpp"
 
 namespace {
 
@@ -184,5 +184,5 @@ BENCHMARK(BM_SurrogateTraining_box)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_SurrogateQuery_shipped)->Unit(benchmark::kMicrosecond)->MinTime(2.0);
 BENCHMARK(BM_FullSolve_shipped)->Unit(benchmark::kSecond)->Iterations(1);
 
-// MPI for the direct solver of the full solves (MUMPS, meshless/mumps_lu.hpp).
+// MPI for the direct solver of the full solves (MUMPS, meshless/solvers/mumps_lu.hpp).
 int main(int argc, char** argv) { return bench::run_benchmarks_with_petsc(argc, argv); }

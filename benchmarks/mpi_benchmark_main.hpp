@@ -48,7 +48,7 @@ inline int run_benchmarks_under_mpi(int argc, char** argv) {
 /// main() of the EFG benchmarks, whose models may pick the PETSc Krylov solver: only the program name is passed on
 /// to PETSc, so that it does not read Google Benchmark's flags; `before_finalize` releases anything that holds PETSc
 /// objects (a cached model) while PETSc is still initialised. Under `mpirun -np N` every process builds the same
-/// model and the Krylov solves are distributed over them (meshless/petsc_krylov_solver.hpp); only rank 0 prints
+/// model and the Krylov solves are distributed over them (meshless/solvers/petsc_krylov_solver.hpp); only rank 0 prints
 /// and writes the --benchmark_out report.
 inline int run_benchmarks_with_petsc(int argc, char** argv, const std::function<void()>& before_finalize = {}) {
   int petsc_argc = 1;

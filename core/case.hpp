@@ -83,7 +83,7 @@ struct MeshlessSpec {
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
   double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
-  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut_weights.hpp). The default, 0, is the
+  /// [m] l, over which the enrichment closes the cut at its front (meshless/cut/cut_weights.hpp). The default, 0, is the
   /// paper's function as it stands: the crack opens closest to the FEM's, but the points beside the front carry
   /// large strains, which on the cracked lung with k = 1 left the law's admissible range (configs/lung_large.json
   /// sets l = spacing / 5). docs/MESHLESS.md §5.2 measures each choice.

@@ -1,7 +1,7 @@
 #pragma once
 // The incision as a ruled surface: a polyline on the tissue surface swept along a depth direction (paper §4,
 // Fig. 3, generalised to 3-D). This one object is the cut of BOTH models: the FEM reference cracks exactly this
-// surface (core/crack_embedding.hpp) and the meshless model enriches its weights with it (meshless/cut_weights.hpp).
+// surface (core/crack_embedding.hpp) and the meshless model enriches its weights with it (meshless/cut/cut_weights.hpp).
 //
 // Geometry. Every panel contains the depth direction d, so the whole surface projects onto the plane normal to d
 // as a 2-D polyline, the TRACE. A point x is described in one global frame built on the trace (CutFrame): the

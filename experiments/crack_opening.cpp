@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "core/crack_embedding.hpp"
-#include "meshless/box_mesh.hpp"
-#include "meshless/efg_model.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/efg/efg_model.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace experiments {

@@ -2,13 +2,13 @@
 // The crack-opening verification of the meshless cut (docs/MESHLESS.md §5): a block 40 x 20 x 20 mm with a
 // surface-breaking crack (the plane y = 10 mm, 10 <= x <= 30 mm, from the top face down 10 mm), clamped on y = 0 and
 // pulled by 60 Pa on y = 20 mm (mode I, elastic step, k = 0). The FEM reference cracks it with duplicated nodes
-// (core/crack_embedding.hpp), the EFG model enriches or shadows its weights (meshless/cut_weights.hpp): both use the
+// (core/crack_embedding.hpp), the EFG model enriches or shadows its weights (meshless/cut/cut_weights.hpp): both use the
 // same core::RuledSurface. Used by tests/test_cut_opening.cpp and `tissue verify meshless`.
 #include <Eigen/Core>
 #include <vector>
 
 #include "core/ruled_surface.hpp"
-#include "meshless/cut_weights.hpp"
+#include "meshless/cut/cut_weights.hpp"
 
 namespace experiments {
 

@@ -9,9 +9,9 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "experiments/progress.hpp"
-#include "meshless/efg_problem.hpp"
-#include "meshless/surrogate_builder.hpp"
-#include "meshless/surrogate_file.hpp"
+#include "meshless/efg/efg_problem.hpp"
+#include "meshless/surrogate/surrogate_builder.hpp"
+#include "meshless/surrogate/surrogate_file.hpp"
 
 namespace experiments {
 namespace {

@@ -12,10 +12,10 @@
 #include "experiments/crack_opening.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/vtu_writer.hpp"
-#include "meshless/cut_quadrature.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/mls_shape_functions.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/cut/cut_quadrature.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace experiments {
 

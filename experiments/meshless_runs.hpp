@@ -7,7 +7,7 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "experiments/model_result.hpp"
-#include "meshless/efg_problem.hpp"
+#include "meshless/efg/efg_problem.hpp"
 
 namespace experiments {
 

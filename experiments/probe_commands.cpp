@@ -18,8 +18,8 @@
 
 #include "core/case.hpp"
 #include "experiments/progress.hpp"
-#include "meshless/surrogate.hpp"
-#include "meshless/surrogate_file.hpp"
+#include "meshless/surrogate/surrogate.hpp"
+#include "meshless/surrogate/surrogate_file.hpp"
 
 namespace experiments {
 namespace {

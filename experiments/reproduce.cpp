@@ -21,9 +21,9 @@
 #include "experiments/meshless_runs.hpp"
 #include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
-#include "meshless/efg_problem.hpp"
-#include "meshless/surrogate.hpp"
-#include "meshless/surrogate_builder.hpp"
+#include "meshless/efg/efg_problem.hpp"
+#include "meshless/surrogate/surrogate.hpp"
+#include "meshless/surrogate/surrogate_builder.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace experiments {

@@ -130,7 +130,7 @@ int finish_meshless_run(const core::Case& c, const core::Geometry& g, double geo
 
 int run_solve_meshless(const std::string& config, const std::string& out_dir) {
   // Under mpirun every process runs this function: rank 0 meshes, prints and writes the results files; all build
-  // the same EFG model from rank 0's geometry and share its Krylov solves (meshless/petsc_krylov_solver.hpp).
+  // the same EFG model from rank 0's geometry and share its Krylov solves (meshless/solvers/petsc_krylov_solver.hpp).
   const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   const core::Case c = core::load_case(config);
   Progress progress("solve meshless", 3 + c.time.steps, !root);

@@ -11,7 +11,7 @@ PACKAGES=(
   libboost-dev           # header-only Boost.Graph (the meshes' numbering) and Boost.Math (tissue rsr)
   libssl-dev             # SHA-256 of the case and of the surrogate file (OpenSSL::Crypto)
   libopenblas0-pthread   # fast BLAS for the sparse LUs (MUMPS, UMFPACK) of both models
-  libmumps-dev           # MUMPS: the EFG model's direct solver (meshless/mumps_lu.hpp; also a PETSc dependency)
+  libmumps-dev           # MUMPS: the EFG model's direct solver (meshless/solvers/mumps_lu.hpp; also a PETSc dependency)
   openmpi-bin libopenmpi-dev  # mpirun for the distributed FEM reference and its MPI test (deal.II is built on OpenMPI)
   libpetsc-real-dev      # PETSc with hypre and Trilinos ML: the EFG model's AMG-Krylov solve (also a deal.II dependency)
   python3 python3-matplotlib

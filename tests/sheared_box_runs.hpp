@@ -6,8 +6,8 @@
 #include <Eigen/Core>
 #include <utility>
 
-#include "meshless/efg_model.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless {
 

@@ -1,13 +1,13 @@
 // 3-D cantilever under a parabolic end shear vs Timoshenko & Goodier (nu = 0, elastic limit k = 0, dt = 0):
 // the L2 and energy-norm errors must converge over four node spacings. With a linear basis the asymptotic rates
 // are 2 (L2) and 1 (energy); over these spacings the energy error still falls faster than that. The bounds
-// (meshless/verification_problems.hpp) sit just under the measured rates, so a lost order fails.
+// (meshless/verification/verification_problems.hpp) sit just under the measured rates, so a lost order fails.
 #include <gtest/gtest.h>
 
 #include <iostream>
 #include <vector>
 
-#include "meshless/verification_problems.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless {
 namespace {

@@ -1,4 +1,4 @@
-// The cut in the meshless model (paper §4; meshless/cut_weights.hpp, meshless/cut_quadrature.hpp): MLS consistency
+// The cut in the meshless model (paper §4; meshless/cut/cut_weights.hpp, meshless/cut/cut_quadrature.hpp): MLS consistency
 // on each side of the cut, exact zeros across it behind the front, continuity at the front (with its rate), the
 // patch test of a cut body, the lips in the divergence identity, and the local update against a full set-up.
 #include <gtest/gtest.h>
@@ -12,15 +12,15 @@
 #include <random>
 #include <set>
 
-#include "meshless/box_mesh.hpp"
-#include "meshless/cut_quadrature.hpp"
-#include "meshless/cut_weights.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/mls_shape_functions.hpp"
-#include "meshless/nodal_sparsity.hpp"
-#include "meshless/node_search.hpp"
-#include "meshless/support_radii.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/cut/cut_quadrature.hpp"
+#include "meshless/cut/cut_weights.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/efg/nodal_sparsity.hpp"
+#include "meshless/mls/node_search.hpp"
+#include "meshless/mls/support_radii.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless {
 namespace {

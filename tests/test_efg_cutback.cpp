@@ -10,8 +10,8 @@
 
 #include "core/inadmissible_strain.hpp"
 #include "core/step_cutback.hpp"
-#include "meshless/box_mesh.hpp"
-#include "meshless/efg_model.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/efg/efg_model.hpp"
 
 namespace meshless {
 namespace {

@@ -10,12 +10,12 @@
 #include <sstream>
 #include <vector>
 
-#include "meshless/petsc_krylov_solver.hpp"
-#include "meshless/available_memory.hpp"
-#include "meshless/direct_solver_estimate.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/mumps_lu.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/solvers/petsc_krylov_solver.hpp"
+#include "meshless/solvers/available_memory.hpp"
+#include "meshless/solvers/direct_solver_estimate.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/solvers/mumps_lu.hpp"
+#include "meshless/verification/verification_problems.hpp"
 #include "tests/sheared_box_runs.hpp"
 
 namespace meshless {

@@ -6,7 +6,7 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
-#include "meshless/efg_model.hpp"
+#include "meshless/efg/efg_model.hpp"
 
 namespace meshless {
 namespace {

@@ -4,11 +4,11 @@
 #include <cmath>
 #include <iostream>
 
-#include "meshless/box_mesh.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/gauss_quadrature_tet.hpp"
-#include "meshless/mls_shape_functions.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/efg/gauss_quadrature_tet.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless {
 namespace {

@@ -1,7 +1,7 @@
 // The EFG model's Krylov solve distributed over two processes, against MUMPS on each process alone. Run under
 // `mpirun -np 2` (ctest: test_efg_mpi_np2, label `mpi`). Every process builds the same model and assembles only the
 // rows it owns; the PETSc solve (LGMRES + SSOR by Eisenstat's trick, local to each process) returns the whole
-// solution to both (meshless/petsc_krylov_solver.hpp). The nonlinear law (k = 2: a non-symmetric tangent that
+// solution to both (meshless/solvers/petsc_krylov_solver.hpp). The nonlinear law (k = 2: a non-symmetric tangent that
 // changes at every Newton iteration) over an elastic and two creep steps.
 #include <deal.II/base/mpi.h>
 #include <gtest/gtest.h>
@@ -11,10 +11,10 @@
 #include <stdexcept>
 #include <string>
 
-#include "meshless/box_mesh.hpp"
-#include "meshless/efg_model.hpp"
-#include "meshless/petsc_krylov_solver.hpp"
-#include "meshless/verification_problems.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/efg/efg_model.hpp"
+#include "meshless/solvers/petsc_krylov_solver.hpp"
+#include "meshless/verification/verification_problems.hpp"
 #include "reference_fem/geometry_broadcast.hpp"
 #include "tests/sheared_box_runs.hpp"
 

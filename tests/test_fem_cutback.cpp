@@ -11,7 +11,7 @@
 #include "core/inadmissible_strain.hpp"
 #include "core/step_cutback.hpp"
 #include "experiments/model_result.hpp"
-#include "meshless/box_mesh.hpp"
+#include "meshless/verification/box_mesh.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace reference_fem {

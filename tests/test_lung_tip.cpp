@@ -19,7 +19,7 @@
 #include "core/geometry.hpp"
 #include "core/inadmissible_strain.hpp"
 #include "core/step_cutback.hpp"
-#include "meshless/efg_model.hpp"
+#include "meshless/efg/efg_model.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace {

@@ -12,7 +12,7 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/mesh_ordering.hpp"
-#include "meshless/box_mesh.hpp"
+#include "meshless/verification/box_mesh.hpp"
 
 namespace {
 

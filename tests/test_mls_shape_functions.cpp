@@ -11,10 +11,10 @@
 #include <set>
 #include <string>
 
-#include "meshless/cubic_spline_weight.hpp"
-#include "meshless/mls_shape_functions.hpp"
-#include "meshless/node_search.hpp"
-#include "meshless/support_radii.hpp"
+#include "meshless/mls/cubic_spline_weight.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/mls/node_search.hpp"
+#include "meshless/mls/support_radii.hpp"
 
 namespace meshless {
 namespace {

@@ -15,15 +15,15 @@
 #include <iostream>
 #include <random>
 
-#include "meshless/box_mesh.hpp"
-#include "meshless/efg_model.hpp"
+#include "meshless/verification/box_mesh.hpp"
+#include "meshless/efg/efg_model.hpp"
 #include "experiments/reproduce.hpp"
-#include "meshless/surrogate.hpp"
-#include "meshless/surrogate_box_case.hpp"
-#include "meshless/surrogate_builder.hpp"
-#include "meshless/surrogate_cost_functions.hpp"
-#include "meshless/surrogate_file.hpp"
-#include "meshless/surrogate_fit.hpp"
+#include "meshless/surrogate/surrogate.hpp"
+#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "meshless/surrogate/surrogate_builder.hpp"
+#include "meshless/surrogate/surrogate_cost_functions.hpp"
+#include "meshless/surrogate/surrogate_file.hpp"
+#include "meshless/surrogate/surrogate_fit.hpp"
 
 namespace meshless {
 namespace {

@@ -1,0 +1,733 @@
+#include "meshless/efg/efg_model.hpp"
+
+#include <Eigen/Dense>
+#include <fmt/format.h>
+
+#include <limits>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <stdexcept>
+#include <unordered_map>
+
+#include "meshless/cut/cut_weights.hpp"
+#include "meshless/solvers/efg_linear_solver.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/mls/node_search.hpp"
+#include "meshless/mls/support_radii.hpp"
+
+namespace meshless {
+
+namespace {
+
+/// Room kept in the matrix arrays of a cut body for the node pairs that local updates add (a fraction of the
+/// entries): a 10 mm extension on configs/lung_large.json adds 46 node pairs (bench_cut) to a matrix of 22.8 M
+/// entries (2.5 M pairs), so 1 % lasts for many updates without a new allocation.
+constexpr double kSpareMatrixFraction = 0.01;
+
+/// Spare slots kept in the shape-function tables of a cut body for the rows a local update evaluates again (a
+/// fraction of the entries; the reused rows stay where they are, update_shape_functions). A 10 mm extension on
+/// configs/lung_large.json evaluates about 4 % of the volume points again, so a quarter lasts for several steps of
+/// an incision before the rows are packed into new arrays.
+constexpr double kSpareTableFraction = 0.25;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// B^T of eq. 22 for one node (3 by 6), gradient g = (phi_x, phi_y, phi_z).
+inline Eigen::Matrix<double, 3, 6> b_transpose(const Eigen::Vector3d& g) {
+  Eigen::Matrix<double, 3, 6> bt;
+  bt << g.x(), 0.0, 0.0, g.y(), 0.0, g.z(),  //
+      0.0, g.y(), 0.0, g.x(), g.z(), 0.0,     //
+      0.0, 0.0, g.z(), 0.0, g.y(), g.x();
+  return bt;
+}
+
+/// Runs body(i) for i in [0, n) in parallel; rethrows the first exception (by index) after the loop, because an
+/// exception must not leave an OpenMP region.
+template <class Body>
+void parallel_for(int n, int chunk, const Body& body) {
+  std::exception_ptr error;
+  int error_index = n;
+#pragma omp parallel for schedule(dynamic, chunk)
+  for (int i = 0; i < n; ++i) {
+    try {
+      body(i);
+    } catch (...) {
+#pragma omp critical(efg_parallel_error)
+      if (i < error_index) {
+        error_index = i;
+        error = std::current_exception();
+      }
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace
+
+EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
+    : problem_(std::move(problem)),
+      options_(options),
+      law_(problem_.material) {
+  if (!(problem_.node_spacing > 0.0))
+    throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
+  if (!(problem_.penalty_factor > 0.0))
+    throw std::invalid_argument(fmt::format("EfgModel '{}': penalty_factor must be > 0", problem_.name));
+  if (problem_.step_times.empty())
+    throw std::invalid_argument(fmt::format("EfgModel '{}': no time steps", problem_.name));
+  double previous = 0.0;
+  for (double t : problem_.step_times) {
+    if (!(t >= previous) || !std::isfinite(t))
+      throw std::invalid_argument(fmt::format("EfgModel '{}': step times must be finite and non-decreasing from 0",
+                                              problem_.name));
+    previous = t;
+  }
+  alpha_ = problem_.alpha();  // eq. 23: alpha = penalty_factor * K1 / node_spacing [Pa/m]
+}
+
+EfgModel::~EfgModel() = default;
+
+void EfgModel::install_cut(const core::RuledSurface* cut) {
+  cut_weights_.reset();
+  mls_->set_weight_modifier(nullptr);
+  if (!cut) return;
+  cut_weights_ = std::make_unique<CutWeights>(*cut, problem_.mesh.vertices, radii_->radii(), problem_.cut_treatment,
+                                               problem_.front_transition);
+  const CutWeights* weights = cut_weights_.get();
+  mls_->set_weight_modifier([weights](int node, const Eigen::Vector3d& x, int side, Eigen::Vector3d* grad) {
+    return (*weights)(node, x, side, grad);
+  });
+}
+
+void EfgModel::build_quadrature(QuadraturePoints* volume, QuadraturePoints* surface) const {
+  const core::TetMesh& mesh = problem_.mesh;
+  const core::RuledSurface* cut = problem_.cut ? &*problem_.cut : nullptr;
+  *volume = volume_quadrature(mesh, problem_.quadrature_order, cut);
+  *surface = boundary_quadrature(mesh, problem_.quadrature_order, cut);
+  if (cut) surface->append(lip_quadrature(mesh, problem_.quadrature_order, *cut));
+}
+
+void EfgModel::setup_system() {
+  auto t0 = std::chrono::steady_clock::now();
+  const core::TetMesh& mesh = problem_.mesh;
+  search_ = std::make_unique<NodeSearch>(mesh.vertices);
+  radii_ = std::make_unique<SupportRadii>(mesh.vertices, *search_, problem_.support);
+  mls_ = std::make_unique<MlsShapeFunctions>(mesh.vertices, *radii_, *search_);
+  install_cut(problem_.cut ? &*problem_.cut : nullptr);
+  QuadraturePoints vq, sq;
+  build_quadrature(&vq, &sq);
+  timings_.setup_seconds = seconds_since(t0);
+
+  // Shape functions and gradients are tabulated once: the cloud does not move (eq. 17 small strain).
+  t0 = std::chrono::steady_clock::now();
+  const double spare = problem_.cut ? kSpareTableFraction : 0.0;
+  volume_ = tabulate_shape_functions(*mls_, std::move(vq), true, spare);
+  surface_ = tabulate_shape_functions(*mls_, std::move(sq), false, spare);
+  timings_.shape_function_seconds = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  const int nq = volume_.size();
+  states_.assign(nq, core::KelvinState{});
+  const int n = mesh.num_vertices();
+  u_ = Eigen::VectorXd::Zero(3 * n);
+  volume_incidence_ = NodeIncidence(volume_, n);
+  surface_incidence_ = NodeIncidence(surface_, n);
+  build_couplings(true);  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
+  timings_.setup_seconds += seconds_since(t0);
+  set_up_ = true;
+}
+
+void EfgModel::build_couplings(bool new_pattern) {
+  const core::TetMesh& mesh = problem_.mesh;
+  const int n = mesh.num_vertices();
+  for (int i = 0; i < n; ++i)
+    if (volume_incidence_.offsets[i + 1] == volume_incidence_.offsets[i])
+      throw std::runtime_error(fmt::format(
+          "EfgModel '{}': node {} at ({:.6g}, {:.6g}, {:.6g}) mm covers no integration point (support radius "
+          "{:.6g} mm); refine the background cells or raise support_factor",
+          problem_.name, i, 1e3 * mesh.vertices(i, 0), 1e3 * mesh.vertices(i, 1), 1e3 * mesh.vertices(i, 2),
+          1e3 * radii_->radius(i)));
+  matrix_current_ = false;
+  if (!new_pattern) {
+    linear_solver_->forget_factors();  // the same method; the body changed, so the next solve factorises again
+  } else {
+    sparsity_ = std::make_unique<NodalSparsity>(
+        n, std::vector<const ShapeTable*>{&volume_, &surface_},
+        std::vector<const NodeIncidence*>{&volume_incidence_, &surface_incidence_});
+    // A cut body keeps spare room in the matrix arrays for the node pairs a local update adds (advance_cut).
+    // Swapped in: Eigen 3.4's SparseMatrix has no move assignment, and operator= would copy the arrays without
+    // the spare room.
+    SparseMatrix fresh = sparsity_->make_matrix(problem_.cut ? kSpareMatrixFraction : 0.0);
+    matrix_.swap(fresh);
+    // A new pattern (set-up, or a cut that advanced into new node pairs): choose and analyse the solver for it
+    // again. The automatic choice runs an AMD ordering of the node pairs: part of the set-up cost.
+    const auto t_choice = std::chrono::steady_clock::now();
+    linear_solver_ = std::make_unique<EfgLinearSolver>(options_, *sparsity_, mesh.vertices, problem_.name);
+    timings_.setup_seconds += seconds_since(t_choice);
+    stats_.linear_solver = linear_solver_->description();
+    stats_.linear_solver_kind = linear_solver_->kind();
+    stats_.direct_peak_memory_estimate = linear_solver_->direct_peak_memory_estimate();
+    stats_.direct_flops_estimate = linear_solver_->direct_flops_estimate();
+    stats_.available_memory = linear_solver_->available_memory_bytes();
+  }
+  boundary_ = make_boundary_terms(problem_, surface_, alpha_);
+
+  // Linear variationally consistent integration: xi_i = (oint phi_i n - int grad phi_i) / int_{supp i} 1, both
+  // integrals by the same quadrature the assembly uses, so that the corrected test gradients satisfy the
+  // discrete divergence theorem exactly (linear patch test to round-off, eq. 21 with eq. 24's traction term). The
+  // boundary integral runs over the outer faces and over both lips of a cut: they bound the body too.
+  Eigen::Matrix3Xd defect = Eigen::Matrix3Xd::Zero(3, n);
+  Eigen::VectorXd support_volume = Eigen::VectorXd::Zero(n);
+  for (int q = 0; q < volume_.size(); ++q)
+    for (int s = volume_.begin(q); s < volume_.end(q); ++s) {
+      defect.col(volume_.nodes[s]) -= volume_.weights[q] * volume_.dphi.col(s);
+      support_volume[volume_.nodes[s]] += volume_.weights[q];
+    }
+  for (int q = 0; q < surface_.size(); ++q)
+    for (int s = surface_.begin(q); s < surface_.end(q); ++s)
+      defect.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * surface_.normals.col(q);
+  divergence_defect_ = defect.colwise().norm().maxCoeff();
+  vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
+  if (options_.variationally_consistent)
+    for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect.col(i) / support_volume[i];
+  const int nq = volume_.size();
+  strain_.assign(nq, core::Vector6::Zero());
+  stress_.assign(nq, core::Vector6::Zero());
+  tangent_.resize(nq);  // scratch of the assembly, which sets it first (update_material): not cleared
+  residual_ = Eigen::VectorXd::Zero(3 * n);
+  external_ = Eigen::VectorXd::Zero(3 * n);
+
+  stats_.num_nodes = n;
+  stats_.num_cells = mesh.num_tets();
+  stats_.num_volume_points = volume_.size();
+  stats_.num_boundary_points = surface_.size();
+  stats_.num_lip_points = 0;
+  for (int q = 0; q < surface_.size(); ++q) stats_.num_lip_points += surface_.on_lip(q);
+  stats_.num_cut_modified_nodes = cut_weights_ ? cut_weights_->num_modified() : 0;
+  stats_.mean_nodes_per_point = nq > 0 ? static_cast<double>(volume_.num_entries()) / nq : 0.0;
+  stats_.matrix_nonzeros = 9 * sparsity_->num_block_entries();
+  stats_.alpha = alpha_;
+  stats_.penalised_area = boundary_.penalised_area;
+  stats_.loaded_area = boundary_.loaded_area;
+}
+
+namespace {
+
+/// For each point of `now`, the row of `before` at the same place (same cell, same side, bitwise the same
+/// coordinates), or -1.
+std::vector<int> match_points(const ShapeTable& before, const QuadraturePoints& now) {
+  std::unordered_map<long long, std::vector<int>> by_cell;
+  auto key = [](int cell, int side) { return 4LL * cell + (side + 1); };
+  for (int q = 0; q < before.size(); ++q) by_cell[key(before.cells[q], before.sides[q])].push_back(q);
+  std::vector<int> match(now.size(), -1);
+  for (int q = 0; q < now.size(); ++q) {
+    const auto it = by_cell.find(key(now.cells[q], now.sides[q]));
+    if (it == by_cell.end()) continue;
+    for (int old : it->second)
+      if (before.points.row(old) == now.points.row(q)) {
+        match[q] = old;
+        break;
+      }
+  }
+  return match;
+}
+
+}  // namespace
+
+/// What decides, under the enrichment, whether a point's weights change between two cuts. h_i(X) =
+/// (1 + sigma_i Phi(X)) / 2 for a node the cut modifies and 1 otherwise (eq. 32): node i enters only through
+/// whether it is modified and its side sigma_i, and the point only through Phi. So a point changes when a node
+/// whose (modified, sigma_i) changed covers it, or when Phi (or its gradient) changed and a node modified by either
+/// cut covers it. Both node sets are small next to the cloud, so a search over each alone is cheap.
+class NodesWithNewEnrichment {
+ public:
+  NodesWithNewEnrichment(const CutWeights& before, const CutWeights& after, const core::PointMatrix& nodes,
+                         const SupportRadii& radii) {
+    std::vector<int> changed, modified;
+    for (int i = 0; i < nodes.rows(); ++i) {
+      if (before.modifies(i) || after.modifies(i)) modified.push_back(i);
+      if (before.modifies(i) != after.modifies(i) || (after.modifies(i) && before.node_side(i) != after.node_side(i)))
+        changed.push_back(i);
+    }
+    changed_ = std::make_unique<Subset>(changed, nodes, radii);
+    modified_ = std::make_unique<Subset>(modified, nodes, radii);
+  }
+  /// True when a node whose enrichment data changed covers x.
+  bool changed_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+    return changed_->covers(x, hits);
+  }
+  /// True when a node modified by either cut covers x.
+  bool modified_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+    return modified_->covers(x, hits);
+  }
+
+ private:
+  /// Some of the nodes, with their radii and a KD-tree over them (which references `positions`).
+  struct Subset {
+    core::PointMatrix positions;
+    Eigen::VectorXd radii;
+    double max_radius = 0.0;
+    std::unique_ptr<NodeSearch> search;
+    Subset(const std::vector<int>& ids, const core::PointMatrix& nodes, const SupportRadii& all)
+        : positions(static_cast<Eigen::Index>(ids.size()), 3), radii(static_cast<Eigen::Index>(ids.size())) {
+      for (std::size_t k = 0; k < ids.size(); ++k) {
+        positions.row(k) = nodes.row(ids[k]);
+        radii[k] = all.radius(ids[k]);
+      }
+      if (ids.empty()) return;
+      max_radius = radii.maxCoeff();
+      search = std::make_unique<NodeSearch>(positions);
+    }
+    bool covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
+      if (!search) return false;
+      search->covering(x, radii, max_radius, hits);
+      return !hits->empty();
+    }
+  };
+  std::unique_ptr<Subset> changed_, modified_;
+};
+
+bool EfgModel::weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
+                               std::vector<NodeHit>* hits, const NodesWithNewEnrichment* enrichment) const {
+  constexpr double kTolerance = 1e-13;  // round-off of h and of rho * grad h
+  if (enrichment) {
+    // h_i = (1 + sigma_i Phi) / 2: the weights of unchanged nodes move with Phi alone (and their gradients with
+    // grad Phi / 2, compared at the largest radius, as below).
+    const CutWeights& after = *cut_weights_;
+    Eigen::Vector3d g0, g1;
+    const double phi0 = before->enrichment_function(x, side, gradients ? &g0 : nullptr);
+    const double phi1 = after.enrichment_function(x, side, gradients ? &g1 : nullptr);
+    if (0.5 * std::abs(phi1 - phi0) > kTolerance || (gradients && 0.5 * radii_->max_radius() * (g1 - g0).norm() > kTolerance))
+      return enrichment->modified_node_covers(x, hits);
+    return enrichment->changed_node_covers(x, hits);
+  }
+  search_->covering(x, radii_->radii(), radii_->max_radius(), hits);
+  const CutWeights* after = cut_weights_.get();
+  Eigen::Vector3d g0 = Eigen::Vector3d::Zero(), g1 = Eigen::Vector3d::Zero();
+  for (const NodeHit& hit : *hits) {
+    const int i = hit.node;
+    if (!(before && before->modifies(i)) && !(after && after->modifies(i))) continue;
+    const double h0 = before ? (*before)(i, x, side, gradients ? &g0 : nullptr) : 1.0;
+    const double h1 = after ? (*after)(i, x, side, gradients ? &g1 : nullptr) : 1.0;
+    if (std::abs(h1 - h0) > kTolerance) return true;
+    if (gradients && radii_->radius(i) * (g1 - g0).norm() > kTolerance) return true;
+  }
+  return false;
+}
+
+CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
+  if (!set_up_) throw std::logic_error("EfgModel::advance_cut before setup_system");
+  const auto t0 = std::chrono::steady_clock::now();
+  CutUpdate report;
+  const std::unique_ptr<CutWeights> before = std::move(cut_weights_);
+  const std::optional<core::RuledSurface> previous_cut = problem_.cut;
+  problem_.cut = cut;
+  install_cut(&cut);
+  QuadraturePoints vq, sq;
+  build_quadrature(&vq, &sq);
+
+  // Reuse the shape functions of every point that is still there and whose covering nodes keep their weights
+  // (paper §4: only the shape functions near the new part of the cut are computed again). A node's weight can
+  // change only if its support meets the cut (old or new), so points farther than 2 rho_max from both cuts are
+  // reused without looking.
+  const double reach = 2.0 * radii_->max_radius();
+  // A cheap bound first: the distance to a cut is at least the distance of the projections along its depth
+  // direction (the cut is open upward), so a point whose projection is farther than `reach` from the box around
+  // both traces is far from both cuts.
+  const Eigen::Vector3d depth_direction = cut.direction();
+  Eigen::AlignedBox3d traces;
+  for (const core::RuledSurface* c : {&cut, previous_cut ? &*previous_cut : nullptr})
+    if (c)
+      for (const Eigen::Vector3d& p : c->top()) traces.extend(p - p.dot(c->direction()) * c->direction());
+  const bool same_direction = !previous_cut || previous_cut->direction() == depth_direction;
+  auto may_be_near = [&](const Eigen::Vector3d& x) {
+    return !same_direction || traces.exteriorDistance(x - x.dot(depth_direction) * depth_direction) < reach;
+  };
+  std::unique_ptr<NodesWithNewEnrichment> enrichment;
+  if (before && before->treatment() == CutTreatment::enrichment && cut_weights_->treatment() == CutTreatment::enrichment &&
+      before->front_transition() == cut_weights_->front_transition())
+    enrichment = std::make_unique<NodesWithNewEnrichment>(*before, *cut_weights_, problem_.mesh.vertices, *radii_);
+  auto reuse_of = [&](const std::vector<int>& same, const QuadraturePoints& points, bool gradients, int* recomputed) {
+    std::vector<int> reuse = same;
+    std::vector<char> changed(points.size(), 0);
+    parallel_for(points.size(), 256, [&](int q) {
+      thread_local std::vector<NodeHit> hits;
+      if (reuse[q] < 0) return;
+      const Eigen::Vector3d x = points.points.row(q).transpose();
+      const bool near = may_be_near(x) && (cut.frame(x).distance < reach ||
+                                           (previous_cut && previous_cut->frame(x).distance < reach));
+      if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits, enrichment.get()))
+        changed[q] = 1;
+    });
+    for (int q = 0; q < points.size(); ++q) {
+      if (changed[q]) reuse[q] = -1;
+      *recomputed += reuse[q] < 0;
+    }
+    return reuse;
+  };
+  const std::vector<int> volume_same = match_points(volume_, vq);
+  const std::vector<int> volume_reuse = reuse_of(volume_same, vq, true, &report.volume_points_recomputed);
+  const std::vector<int> surface_reuse =
+      reuse_of(match_points(surface_, sq), sq, false, &report.boundary_points_recomputed);
+  report.volume_points = vq.size();
+  report.boundary_points = sq.size();
+
+  // History (eqs. 15-16): a point that is still there keeps its state; a new point (a cell split differently)
+  // takes the state of the nearest old point of the same cell.
+  std::vector<core::KelvinState> states(vq.size());
+  std::unordered_map<int, std::vector<int>> old_points_of_cell;  // only the cells that have new points
+  for (int q = 0; q < vq.size(); ++q)
+    if (volume_same[q] < 0) old_points_of_cell[vq.cells[q]];
+  for (int q = 0; q < volume_.size(); ++q)
+    if (const auto it = old_points_of_cell.find(volume_.cells[q]); it != old_points_of_cell.end()) it->second.push_back(q);
+  for (int q = 0; q < vq.size(); ++q) {
+    if (volume_same[q] >= 0) {
+      states[q] = states_[volume_same[q]];
+      continue;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (int old : old_points_of_cell.at(vq.cells[q])) {
+      const double d = (volume_.points.row(old) - vq.points.row(q)).squaredNorm();
+      if (d < best) {
+        best = d;
+        states[q] = states_[old];
+      }
+    }
+  }
+
+  report.quadrature_seconds = seconds_since(t0);
+  const auto t1 = std::chrono::steady_clock::now();
+  const bool volume_packed = update_shape_functions(*mls_, std::move(vq), volume_reuse, kSpareTableFraction, &volume_).packed;
+  const bool surface_packed = update_shape_functions(*mls_, std::move(sq), surface_reuse, kSpareTableFraction, &surface_).packed;
+  report.tables_packed = volume_packed || surface_packed;
+  report.shape_function_seconds = seconds_since(t1);
+  states_ = std::move(states);
+
+  // A reused row keeps its nodes, whose pairs the pattern holds; only the recomputed rows can bring a new pair.
+  const auto t2 = std::chrono::steady_clock::now();
+  // The incidence follows the tables: merged from the one before when the kept rows stayed in their slots.
+  const int n = problem_.mesh.num_vertices();
+  volume_incidence_ = volume_packed ? NodeIncidence(volume_, n) : NodeIncidence(volume_incidence_, volume_, volume_reuse);
+  surface_incidence_ =
+      surface_packed ? NodeIncidence(surface_, n) : NodeIncidence(surface_incidence_, surface_, surface_reuse);
+  auto recomputed_rows = [](const std::vector<int>& reuse) {
+    std::vector<int> rows;
+    for (int q = 0; q < static_cast<int>(reuse.size()); ++q)
+      if (reuse[q] < 0) rows.push_back(q);
+    return rows;
+  };
+  report.pairs_added = sparsity_->add_pairs(volume_, recomputed_rows(volume_reuse)) +
+                       sparsity_->add_pairs(surface_, recomputed_rows(surface_reuse));
+  if (report.pairs_added > 0) {
+    sparsity_->refill_matrix(&matrix_);  // in the spare room kept at set-up
+    // A solver's symbolic analysis (UMFPACK's ordering) belongs to the old pattern: start a solver of the method
+    // chosen at set-up afresh. Without new pairs the kept solver reuses its analysis.
+    EfgOptions chosen = options_;
+    chosen.linear_solver = linear_solver_->kind();
+    linear_solver_ = std::make_unique<EfgLinearSolver>(chosen, *sparsity_, problem_.mesh.vertices, problem_.name);
+  }
+  build_couplings(false);
+  report.coupling_seconds = seconds_since(t2);
+  report.seconds = seconds_since(t0);
+  report.modified_nodes = cut_weights_->num_modified();
+  return report;
+}
+
+void EfgModel::update_material(double dt) {
+  // eq. 17: strain from the current parameters; eq. 13 through the shared law (one state per point).
+  const ShapeTable& t = volume_;
+  const bool check_margin = problem_.material.k != 0.0;  // the margin is 1 everywhere when k = 0
+  if (check_margin) margins_.resize(t.size());
+  parallel_for(t.size(), 512, [&](int q) {
+    core::Vector6 e = core::Vector6::Zero();
+    for (int s = t.begin(q); s < t.end(q); ++s) {
+      const Eigen::Vector3d g = t.dphi.col(s);
+      const Eigen::Vector3d u = u_.segment<3>(3 * t.nodes[s]);
+      e[0] += g.x() * u.x();
+      e[1] += g.y() * u.y();
+      e[2] += g.z() * u.z();
+      e[3] += g.y() * u.x() + g.x() * u.y();
+      e[4] += g.z() * u.y() + g.y() * u.z();
+      e[5] += g.z() * u.x() + g.x() * u.z();
+    }
+    strain_[q] = e;
+    if (!e.allFinite())
+      throw std::runtime_error(fmt::format("EfgModel '{}': non-finite strain at volume point {}", problem_.name, q));
+    if (check_margin) margins_[q] = law_.admissibility_margin(e);
+    const core::KelvinResponse r = law_.update(states_[q], e, dt);
+    stress_[q] = r.stress;
+    tangent_[q] = r.tangent;
+  });
+  // The law's admissible range (docs/MATERIAL.md §1.5), at every point of every iterate; newton_step() decides
+  // what a point past it means (core/step_cutback.hpp).
+  weakest_point_ = -1;
+  if (!check_margin || margins_.empty()) return;
+  weakest_point_ = static_cast<int>(std::min_element(margins_.begin(), margins_.end()) - margins_.begin());
+}
+
+std::shared_ptr<const core::InadmissibleStrain> EfgModel::inadmissible_iterate() const {
+  if (weakest_point_ < 0 || margins_[weakest_point_] > 0.0) return nullptr;
+  return std::make_shared<const core::InadmissibleStrain>(
+      fmt::format("meshless (EFG) model '{}'", problem_.name), current_time_,
+      volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_], law_);
+}
+
+void EfgModel::assemble_system(bool with_matrix) {
+  if (!set_up_) throw std::logic_error("EfgModel::assemble_system before setup_system");
+  update_material(current_dt_);
+
+  // u-bar mismatch of the penalty term needs u(X_q) = sum phi_j U_j at the penalised boundary points.
+  const ShapeTable& sv = surface_;
+  std::vector<Eigen::Vector3d> u_surface(sv.size(), Eigen::Vector3d::Zero());
+  for (int q = 0; q < sv.size(); ++q) {
+    if (boundary_.penalty_weight[q] == 0.0) continue;
+    for (int s = sv.begin(q); s < sv.end(q); ++s) u_surface[q] += sv.phi[s] * u_.segment<3>(3 * sv.nodes[s]);
+  }
+
+  const int n = problem_.mesh.num_vertices();
+  double* values = matrix_.valuePtr();
+  const NodalSparsity& sp = *sparsity_;
+  const ShapeTable& vt = volume_;
+  // The rows the linear solver reads: all, or this process's share of a distributed solve. The residual is
+  // assembled whole on every process (each runs the same Newton iterations).
+  const auto [first_row_node, end_row_node] = linear_solver_->nodes_read(n);
+  // Row by row (the equations of node i): each thread owns whole rows, so no locks or atomics are needed.
+  parallel_for(n, 16, [&](int i) {
+    const bool with_row = with_matrix && i >= first_row_node && i < end_row_node;
+    thread_local std::vector<int> position;
+    if (static_cast<int>(position.size()) != n) position.assign(n, -1);
+    for (int k = sp.row_begin(i); k < sp.row_end(i); ++k) position[sp.column(k)] = k - sp.row_begin(i);
+    const int len = sp.row_length(i);
+    double* row[3] = {values + sp.value_index(i, 0, 0, 0), values + sp.value_index(i, 1, 0, 0),
+                      values + sp.value_index(i, 2, 0, 0)};
+    if (with_row)
+      for (int a = 0; a < 3; ++a) std::fill(row[a], row[a] + 3 * len, 0.0);
+    Eigen::Vector3d f = Eigen::Vector3d::Zero();
+
+    // eq. 21 and the internal-force terms of eq. 24: int B_i^T sigma, int B_i^T E_k B_j.
+    for (int e = volume_incidence_.offsets[i]; e < volume_incidence_.offsets[i + 1]; ++e) {
+      const int q = volume_incidence_.points[e];
+      const double w = vt.weights[q];
+      const Eigen::Vector3d g = vt.dphi.col(volume_incidence_.slots[e]) + vci_correction_.col(i);
+      const Eigen::Matrix<double, 3, 6> bt = b_transpose(g);
+      f.noalias() += w * (bt * stress_[q]);
+      if (!with_row) continue;
+      const Eigen::Matrix<double, 3, 6> gd = w * (bt * tangent_[q]);
+      for (int s = vt.begin(q); s < vt.end(q); ++s) {
+        const int k = position[vt.nodes[s]];
+        const double hx = vt.dphi(0, s), hy = vt.dphi(1, s), hz = vt.dphi(2, s);
+        // (B_i^T E_k) B_j with the zero pattern of B_j (eq. 22) spelt out: 27 multiplications.
+        for (int a = 0; a < 3; ++a) {
+          double* v = row[a] + 3 * k;
+          v[0] += gd(a, 0) * hx + gd(a, 3) * hy + gd(a, 5) * hz;
+          v[1] += gd(a, 1) * hy + gd(a, 3) * hx + gd(a, 4) * hz;
+          v[2] += gd(a, 2) * hz + gd(a, 4) * hy + gd(a, 5) * hx;
+        }
+      }
+    }
+    // eq. 23: K^alpha_ij = int alpha phi_i phi_j I3, and its residual alpha int phi_i u(X) (u-bar part is external).
+    for (int e = surface_incidence_.offsets[i]; e < surface_incidence_.offsets[i + 1]; ++e) {
+      const int q = surface_incidence_.points[e];
+      const double c = boundary_.penalty_weight[q];
+      if (c == 0.0) continue;
+      const double ci = c * sv.phi[surface_incidence_.slots[e]];
+      f += ci * u_surface[q];
+      if (!with_row) continue;
+      for (int s = sv.begin(q); s < sv.end(q); ++s) {
+        const int k = position[sv.nodes[s]];
+        const double v = ci * sv.phi[s];
+        for (int a = 0; a < 3; ++a) row[a][3 * k + a] += v;
+      }
+    }
+    residual_.segment<3>(3 * i) = f - external_.segment<3>(3 * i);
+    for (int k = sp.row_begin(i); k < sp.row_end(i); ++k) position[sp.column(k)] = -1;
+  });
+  if (!residual_.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel '{}': the residual is not finite", problem_.name));
+  if (with_matrix) {
+    matrix_current_ = true;
+    linear_solver_->invalidate();
+  }
+}
+
+void EfgModel::solve() {
+  if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
+    throw std::logic_error("EfgModel::solve without an assembled matrix");
+  last_solve_prepared_ = false;
+  if (!linear_solver_->prepared()) {
+    // A newer tangent than the factors: GMRES preconditioned by them costs a few back-substitutions, a fresh
+    // factorisation tens of seconds on the lung (docs/MESHLESS.md §2). factorised_dt_ stays that of the factors.
+    if (std::optional<Eigen::VectorXd> du =
+            linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations)) {
+      u_ += *du;
+      last_linear_iterations_ = linear_solver_->last_iterations();
+      return;
+    }
+    linear_solver_->prepare(matrix_);
+    last_solve_prepared_ = true;
+    stats_.linear_solver = linear_solver_->description();  // a multigrid reports its levels once built
+  }
+  u_ += linear_solver_->solve(-residual_);  // eq. 14; solve() checks the update is finite
+  last_linear_iterations_ = linear_solver_->last_iterations();
+  factorised_dt_ = current_dt_;
+}
+
+StepRecord EfgModel::solve_step(int step) {
+  if (!set_up_) throw std::logic_error("EfgModel::solve_step before setup_system");
+  const std::vector<double>& times = problem_.step_times;
+  if (step < 1 || step > static_cast<int>(times.size())) throw std::out_of_range("EfgModel::solve_step: bad step");
+  StepRecord rec;
+  rec.step = step;
+  rec.time = times[step - 1];
+  const double t_start = step >= 2 ? times[step - 2] : 0.0;
+  rec.dt = rec.time - t_start;
+  rec.load_scale = problem_.load_scale(rec.time);
+  // One Newton solve over the whole step; halved sub-steps only when it fails.
+  const core::CutBackRecord cut = core::advance_with_cutback(
+      fmt::format("meshless (EFG) model '{}'", problem_.name), t_start, rec.time, problem_.min_step,
+      [&](double t_from, double t_to) { return newton_step(t_from, t_to, &rec); });
+  rec.substeps = cut.substeps;
+  rec.cutbacks = cut.cutbacks;
+  rec.failed_attempts = cut.failures;
+  timings_.assembly_seconds += rec.assembly_seconds;
+  timings_.solve_seconds += rec.solve_seconds;
+  records_.push_back(rec);
+  return rec;
+}
+
+core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord* rec) {
+  core::NewtonAttempt attempt;
+  attempt.t_start = t_from;
+  attempt.t_end = t_to;
+  current_time_ = t_to;
+  current_dt_ = t_to - t_from;
+  external_ = boundary_.penalty_load + problem_.load_scale(t_to) * boundary_.traction_load;
+  double reference = external_.norm();
+  const Eigen::VectorXd u_start = u_;  // the committed state: restored when this attempt fails
+
+  // Newton with tangent reuse. A factorisation costs seconds (dense EFG rows), a back-substitution a
+  // fraction of that, so the last factorised consistent tangent is kept while it still contracts the
+  // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
+  // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
+  const bool constant_tangent = problem_.material.k == 0.0;
+  const core::DivergenceTest diverging;
+  // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
+  // last-bit difference must not cost a factorisation.
+  auto factors_dt = [&] { return std::abs(factorised_dt_ - current_dt_) <= 1e-9 * std::abs(current_dt_); };
+  bool refresh = !linear_solver_->prepared() || !factors_dt();
+  double previous = std::numeric_limits<double>::infinity();
+  for (int it = 0;; ++it) {
+    const bool reuse = !refresh && linear_solver_->prepared() && factors_dt();
+    auto t0 = std::chrono::steady_clock::now();
+    try {
+      assemble_system(!reuse);
+    } catch (const std::runtime_error& e) {
+      attempt.failure = e.what();
+      break;
+    }
+    // A transient iterate past the admissible range is remembered, not fatal: if Newton fails, the first such
+    // iterate is reported (later iterates of a failing attempt drifted further off on the lung-tip case).
+    if (!attempt.inadmissible) attempt.inadmissible = inadmissible_iterate();
+    if (reuse) rec->reused_factorisation = true;
+    rec->assembly_seconds += seconds_since(t0);
+    const double r = residual_.norm();
+    if (!(reference > 0.0)) reference = r > 0.0 ? r : 1.0;
+    attempt.residuals.push_back(r / reference);
+    attempt.failure = diverging(attempt.residuals);
+    if (!attempt.converged()) break;
+    refresh = !constant_tangent && reuse && r > options_.refactor_contraction * previous;
+    previous = r;
+    if (r <= options_.newton_tolerance * reference) break;
+    if (it >= options_.max_newton_iterations) {
+      attempt.failure = "the iteration limit (max_newton_iterations) was reached";
+      break;
+    }
+    t0 = std::chrono::steady_clock::now();
+    try {
+      solve();
+    } catch (const std::runtime_error& e) {
+      attempt.failure = e.what();
+      break;
+    }
+    rec->solve_seconds += seconds_since(t0);
+    rec->linear_iterations += last_linear_iterations_;
+    rec->factorisations += last_solve_prepared_;
+    ++rec->newton_iterations;
+    ++attempt.iterations;
+  }
+  if (!attempt.converged()) {
+    u_ = u_start;
+    linear_solver_->forget_factors();  // factors of a failed iterate: never reuse them
+    matrix_current_ = false;
+    return attempt;
+  }
+  // A converged state past the range is no equilibrium of the law: no step size helps, stop the run.
+  if (auto outside = inadmissible_iterate()) {
+    u_ = u_start;
+    throw core::InadmissibleStrain(*outside);
+  }
+  attempt.inadmissible = nullptr;
+  rec->residuals = attempt.residuals;
+  if (weakest_point_ >= 0) {
+    const double m = margins_[weakest_point_];
+    rec->admissibility_margin = std::min(rec->admissibility_margin, m);
+    smallest_margin_.update(m, t_to, volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_]);
+  }
+  // Commit the history (eqs. 15-16) at the converged strain of every point.
+  parallel_for(volume_.size(), 1024, [&](int q) { law_.update(states_[q], strain_[q], current_dt_, &states_[q]); });
+  return attempt;
+}
+
+void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
+  if (!set_up_) throw std::logic_error("EfgModel::restart before setup_system");
+  problem_.loaded_faces = std::move(loaded_faces);
+  problem_.traction = std::move(traction);
+  boundary_ = make_boundary_terms(problem_, surface_, alpha_);  // eq. 24's traction term for the new load
+  stats_.loaded_area = boundary_.loaded_area;
+  states_.assign(states_.size(), core::KelvinState{});
+  for (core::Vector6& e : strain_) e.setZero();
+  for (core::Vector6& s : stress_) s.setZero();
+  u_.setZero();
+  residual_.setZero();
+  external_.setZero();
+  records_.clear();
+  matrix_current_ = false;  // the factorisation (factorisation_, factorised_dt_) is kept for solve_step to reuse
+}
+
+void EfgModel::run(const StepObserver& observer) {
+  setup_system();
+  const int n = static_cast<int>(problem_.step_times.size());
+  for (int step = 1; step <= n; ++step) {
+    const StepRecord rec = solve_step(step);
+    const int every = std::max(1, problem_.output_every);
+    if (observer && (step % every == 0 || step == n)) observer(*this, rec);  // output_results
+  }
+}
+
+Eigen::Vector3d EfgModel::displacement_at(const Eigen::Vector3d& x, int side) const {
+  // A point next to a cut is on the lip given by the rule both models share (core::RuledSurface::side), unless
+  // the caller names one.
+  if (side == 0 && problem_.cut) side = problem_.cut->side(x);
+  const MlsEvaluation e = mls_->evaluate(x, false, side);
+  Eigen::Vector3d u = Eigen::Vector3d::Zero();
+  for (int k = 0; k < e.size(); ++k) u += e.phi[k] * u_.segment<3>(3 * e.nodes[k]);  // eq. 7
+  if (!u.allFinite())
+    throw std::runtime_error(fmt::format("EfgModel: non-finite displacement at ({:.6g}, {:.6g}, {:.6g}) mm",
+                                         1e3 * x.x(), 1e3 * x.y(), 1e3 * x.z()));
+  return u;
+}
+
+core::PointMatrix EfgModel::displacements_at(const core::PointMatrix& points) const {
+  if (!set_up_) throw std::logic_error("EfgModel::displacements_at before setup_system");
+  core::PointMatrix u(points.rows(), 3);
+  parallel_for(static_cast<int>(points.rows()), 256,
+               [&](int p) { u.row(p) = displacement_at(points.row(p).transpose()).transpose(); });
+  return u;
+}
+
+std::vector<core::Vector6> EfgModel::quadrature_strains() const { return strain_; }
+
+}  // namespace meshless
