@@ -42,7 +42,7 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
       r.training_solves, r.training.workers, r.training.model_bytes / 1e9, r.training.wall_seconds,
       r.fit_seconds);
   std::map<std::string, int> terminations;
-  int fits = 0, max_iterations = 0;
+  int fits = 0, dropped_columns = 0, columns = 0;
   for (std::size_t c = 0; c < d.contacts.size(); ++c) {
     const meshless::ContactFit& f = d.contacts[c];
     const Eigen::Vector3d x = f.frame.origin * 1e3;
@@ -64,14 +64,18 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
     for (const meshless::FitSummary& s : f.summaries) {
       ++terminations[s.termination];
       ++fits;
-      max_iterations = std::max(max_iterations, s.iterations);
+      if (s.termination != "SOLVED") continue;
+      columns += s.num_parameters;
+      dropped_columns += s.num_parameters - s.rank;
     }
   }
   std::string counts;
   for (const auto& [name, n] : terminations)
     counts += fmt::format("{}{} {}", counts.empty() ? "" : ", ", n, name);
-  std::cout << fmt::format("Ceres Levenberg-Marquardt: {} fits ({}), at most {} iterations\n", fits, counts,
-                           max_iterations);
+  std::cout << fmt::format(
+      "linear least squares (scaled columns, pivoted QR): {} fits ({}); {} of their {} basis columns dropped "
+      "as dependent\n",
+      fits, counts, dropped_columns, columns);
   for (const meshless::HoldoutError& e : r.holdouts)
     std::cout << fmt::format(
         "held-out force ({:.4g}, {:.4g}, {:.4g}) N: RMSE over the surface {:.4g} mm = {:.2f} % of the "
@@ -161,8 +165,7 @@ void add_fit_commands(CLI::App& app) {
       "fit",
       "Train the force -> displacement surrogate (paper §3, eqs. 25-28) on the case's node cloud with the "
       "full "
-      "meshless model, fit it with Ceres Levenberg-Marquardt (orders by cross-validation), check it on "
-      "held-out "
+      "meshless model, fit it by linear least squares (orders by cross-validation), check it on held-out "
       "forces and write FILE (docs/SURROGATE.md). Options come from the case's /surrogate block.");
   static FitArguments args;
   fit->add_option("CONFIG", args.config, "Load-case JSON file (schema: docs/CONFIG.md, /surrogate)")

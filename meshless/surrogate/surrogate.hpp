@@ -28,8 +28,7 @@ struct SurrogateData {
   std::vector<int> surface_vertex;     ///< #S node ids in the case's meshless node cloud
   core::PointMatrix surface_position;  ///< #S by 3 [m]
   std::vector<ContactFit> contacts;    ///< contact indices refer to the surface nodes above
-  nlohmann::json
-      report;  ///< cross-validation, Ceres summaries, held-out errors, timings (for people, not queries)
+  nlohmann::json report;  ///< training figures, held-out errors, timings (for people, not queries)
 };
 
 /// The answer to one query (the surface displacements go to the caller's buffer).

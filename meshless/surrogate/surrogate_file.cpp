@@ -102,16 +102,21 @@ json to_json(const ContactFit& c) {
                     {"training_rms", a.training_rms},
                     {"induced_field", fields}});
   }
+  // The key keeps its format-1 name: files fitted by Ceres LM hold its summaries there, files fitted by the
+  // linear least squares hold theirs, with the rank (docs/SURROGATE.md §5).
   json summaries = json::array();
-  for (const FitSummary& s : c.summaries)
-    summaries.push_back({{"what", s.what},
-                         {"termination", s.termination},
-                         {"usable", s.usable},
-                         {"iterations", s.iterations},
-                         {"initial_cost", s.initial_cost},
-                         {"final_cost", s.final_cost},
-                         {"residuals", s.num_residuals},
-                         {"parameters", s.num_parameters}});
+  for (const FitSummary& s : c.summaries) {
+    json one = {{"what", s.what},
+                {"termination", s.termination},
+                {"usable", s.usable},
+                {"iterations", s.iterations},
+                {"initial_cost", s.initial_cost},
+                {"final_cost", s.final_cost},
+                {"residuals", s.num_residuals},
+                {"parameters", s.num_parameters}};
+    if (s.rank >= 0) one["rank"] = s.rank;
+    summaries.push_back(std::move(one));
+  }
   return {{"surface_node", c.contact},
           {"frame",
            {{"origin", vec(c.frame.origin)},
@@ -169,7 +174,8 @@ ContactFit contact_from_json(const json& j) {
   }
   for (const json& s : j.at("ceres_summaries"))
     c.summaries.push_back({s.at("what"), s.at("termination"), s.at("usable"), s.at("iterations"),
-                           s.at("initial_cost"), s.at("final_cost"), s.at("residuals"), s.at("parameters")});
+                           s.at("initial_cost"), s.at("final_cost"), s.at("residuals"), s.at("parameters"),
+                           s.value("rank", -1)});  // no rank in files fitted by Ceres
   return c;
 }
 

@@ -6,70 +6,88 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <random>
 #include <stdexcept>
-#include <thread>
-
-#include "meshless/surrogate/surrogate_cost_functions.hpp"
 
 namespace meshless {
+
+ScaledLeastSquares::ScaledLeastSquares(const Eigen::MatrixXd& a, double rank_threshold)
+    : inverse_scale_(a.cols()), rows_(a.rows()) {
+  if (!(rank_threshold > 0.0 && rank_threshold < 1.0))
+    throw std::invalid_argument("ScaledLeastSquares: the rank threshold must be in (0, 1)");
+  if (!a.allFinite())
+    throw std::invalid_argument("ScaledLeastSquares: the design matrix has a non-finite entry");
+  Eigen::MatrixXd scaled = a;
+  for (Eigen::Index k = 0; k < a.cols(); ++k) {
+    const double norm = a.col(k).norm();
+    inverse_scale_[k] = norm > 0.0 ? 1.0 / norm : 0.0;
+    scaled.col(k) *= inverse_scale_[k];
+  }
+  if (a.rows() == 0 || a.cols() == 0) return;
+  qr_.compute(scaled);
+  // The leading pivots above the threshold: with column pivoting |R_kk| does not increase along the diagonal,
+  // so the first one at or below it ends the columns the data can determine. Eigen's own rank() counts every
+  // pivot above the threshold but its solve() ignores the threshold, hence this count and solve() below.
+  const Eigen::MatrixXd& r = qr_.matrixQR();
+  const double largest = std::abs(r(0, 0));
+  while (rank_ < qr_.nonzeroPivots() && std::abs(r(rank_, rank_)) > rank_threshold * largest) ++rank_;
+}
+
+Eigen::MatrixXd ScaledLeastSquares::solve(const Eigen::MatrixXd& b) const {
+  if (b.rows() != rows_)
+    throw std::invalid_argument(
+        fmt::format("ScaledLeastSquares::solve: {} rows expected, {} given", rows_, b.rows()));
+  Eigen::MatrixXd x = Eigen::MatrixXd::Zero(cols(), b.cols());
+  if (rank_ == 0) return x;
+  // Q^T b: the reflectors beyond the rank do not touch its first rank_ rows.
+  Eigen::MatrixXd c = b;
+  c.applyOnTheLeft(qr_.householderQ().setLength(rank_).adjoint());
+  const Eigen::MatrixXd y =
+      qr_.matrixQR().topLeftCorner(rank_, rank_).triangularView<Eigen::Upper>().solve(c.topRows(rank_));
+  const auto& permutation = qr_.colsPermutation().indices();
+  for (Eigen::Index i = 0; i < rank_; ++i)
+    x.row(permutation[i]) = y.row(i) * inverse_scale_[permutation[i]];  // back to the unscaled columns
+  return x;
+}
+
 namespace {
 
 const char* const kAxis = "xyz";
 
-ceres::Solver::Options solver_options(const SurrogateFitOptions& o) {
-  ceres::Solver::Options s;
-  s.minimizer_type = ceres::TRUST_REGION;
-  s.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  s.linear_solver_type = ceres::DENSE_QR;
-  s.max_num_iterations = o.max_num_iterations;
-  s.function_tolerance = o.function_tolerance;
-  s.gradient_tolerance = o.gradient_tolerance;
-  s.parameter_tolerance = o.parameter_tolerance;
-  s.logging_type = ceres::SILENT;
-  s.minimizer_progress_to_stdout = false;
-  s.num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  return s;
-}
-
-FitSummary summarise(std::string what, const ceres::Solver::Summary& s) {
+/// The summary of a fit whose data all lie below the noise floor: zero coefficients, nothing solved.
+FitSummary below_noise_floor(std::string what, const Eigen::VectorXd& b, int parameters) {
   FitSummary f;
   f.what = std::move(what);
-  f.termination = ceres::TerminationTypeToString(s.termination_type);
-  f.usable = s.IsSolutionUsable();
-  f.iterations = static_cast<int>(s.iterations.size());
-  f.initial_cost = s.initial_cost;
-  f.final_cost = s.final_cost;
-  f.num_residuals = s.num_residuals;
-  f.num_parameters = s.num_parameters;
+  f.termination = "BELOW_NOISE_FLOOR";
+  f.usable = true;
+  f.initial_cost = f.final_cost = 0.5 * b.squaredNorm();
+  f.num_residuals = static_cast<int>(b.size());
+  f.num_parameters = parameters;
+  f.rank = 0;
   return f;
 }
 
-/// Throws when Ceres did not produce a usable solution, with its own report and what to change.
-void require_usable(const FitSummary& f, const ceres::Solver::Summary& s) {
-  if (f.usable && s.termination_type != ceres::FAILURE) return;
-  throw std::runtime_error(
-      fmt::format("the Levenberg-Marquardt fit of {} failed ({}: {}); lower surrogate.max_force_order or "
-                  "surrogate.max_tangential_order / max_normal_order",
-                  f.what, f.termination, s.message));
-}
-
-/// Eqs. 25-27 for one component by Ceres LM: the coefficients r_1..r_order of s^1..s^order (scaled units).
-Eigen::VectorXd fit_force_polynomial(const std::vector<double>& s, const std::vector<double>& u, int order,
-                                     const SurrogateFitOptions& options, const std::string& what,
-                                     FitSummary* summary) {
-  std::vector<double> r(order, 0.0);
-  ceres::Problem problem;
-  for (std::size_t l = 0; l < s.size(); ++l)
-    problem.AddResidualBlock(ForcePolynomialResidual::Create(s[l], u[l], order), nullptr, r.data());
-  ceres::Solver::Options so = solver_options(options);
-  so.num_threads = 1;
-  ceres::Solver::Summary cs;
-  ceres::Solve(so, &problem, &cs);
-  const FitSummary f = summarise(what, cs);
-  require_usable(f, cs);
-  if (summary) *summary = f;
-  return Eigen::Map<Eigen::VectorXd>(r.data(), order);
+/// min |A c - b| through `ls` (the factorisation of A), or c = 0 when every value of b is at most
+/// `noise_floor` (b is in units of the axis' largest displacement). Never fails.
+Eigen::VectorXd fit_linear(const ScaledLeastSquares& ls, const Eigen::MatrixXd& a, const Eigen::VectorXd& b,
+                           double noise_floor, std::string what, FitSummary* summary) {
+  if (b.size() == 0 || b.cwiseAbs().maxCoeff() <= noise_floor) {
+    *summary = below_noise_floor(std::move(what), b, static_cast<int>(a.cols()));
+    return Eigen::VectorXd::Zero(a.cols());
+  }
+  const Eigen::VectorXd c = ls.solve(b);
+  FitSummary& f = *summary;
+  f = FitSummary{};
+  f.what = std::move(what);
+  f.termination = "SOLVED";
+  f.usable = true;
+  f.initial_cost = 0.5 * b.squaredNorm();
+  f.final_cost = 0.5 * (a * c - b).squaredNorm();
+  f.num_residuals = static_cast<int>(b.size());
+  f.num_parameters = static_cast<int>(a.cols());
+  f.rank = ls.rank();
+  return c;
 }
 
 double polynomial(const Eigen::VectorXd& r, double s) {
@@ -79,14 +97,13 @@ double polynomial(const Eigen::VectorXd& r, double s) {
 }
 
 /// The smallest candidate (in the order given: fewest coefficients first) whose cross-validation error is
-/// within kParsimony of the best one, or at round-off level (kRoundOff of the data's scale): a larger model
-/// must earn its coefficients.
+/// within kParsimony of the best one, or below the noise floor (`noise_floor` of the data's scale, where two
+/// errors cannot be told apart): a larger model must earn its coefficients.
 constexpr double kParsimony = 0.01;
-constexpr double kRoundOff = 1e-10;
-std::size_t most_parsimonious(const std::vector<CvScore>& scores, double data_scale) {
+std::size_t most_parsimonious(const std::vector<CvScore>& scores, double data_scale, double noise_floor) {
   double best = std::numeric_limits<double>::infinity();
   for (const CvScore& s : scores) best = std::min(best, s.rms);
-  const double good_enough = std::max((1.0 + kParsimony) * best, kRoundOff * data_scale);
+  const double good_enough = std::max((1.0 + kParsimony) * best, noise_floor * data_scale);
   for (std::size_t i = 0; i < scores.size(); ++i)
     if (scores[i].rms <= good_enough) return i;
   return 0;
@@ -131,7 +148,7 @@ Eigen::MatrixXd columns(const Eigen::MatrixXd& m, const std::vector<int>& cols) 
 }
 
 /// The contact node's eqs. 25-27 on one axis: lambda by k-fold cross-validation over the force levels, then
-/// the fit on every level.
+/// the fit on every level. The fits are linear least squares in the coefficients r_ip (ScaledLeastSquares).
 void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vector3d>& u, double u_scale,
                       double max_force, int axis, const SurrogateFitOptions& options, AxisFit* out,
                       std::vector<FitSummary>* summaries) {
@@ -144,39 +161,41 @@ void fit_contact_node(const std::vector<double>& s, const std::vector<Eigen::Vec
     double sq = 0.0;
     for (int f = 0; f < k; ++f) {
       std::vector<double> st;
-      std::array<std::vector<double>, 3> ut;
+      std::vector<int> train;
       for (int l = 0; l < n; ++l)
         if (fold[l] != f) {
           st.push_back(s[l]);
-          for (int i = 0; i < 3; ++i) ut[i].push_back(u[l][i] / u_scale);
+          train.push_back(l);
         }
-      for (int i = 0; i < 3; ++i) {
-        const Eigen::VectorXd r =
-            fit_force_polynomial(st, ut[i], order, options, "cross-validation", nullptr);
-        for (int l = 0; l < n; ++l)
-          if (fold[l] == f) sq += std::pow(u_scale * polynomial(r, s[l]) - u[l][i], 2);
-      }
+      Eigen::MatrixXd ut(train.size(), 3);  // scaled units
+      for (std::size_t r = 0; r < train.size(); ++r) ut.row(r) = u[train[r]].transpose() / u_scale;
+      const Eigen::MatrixXd r = ScaledLeastSquares(force_powers(st, order), options.rank_threshold).solve(ut);
+      for (int l = 0; l < n; ++l)
+        if (fold[l] == f)
+          for (int i = 0; i < 3; ++i) sq += std::pow(u_scale * polynomial(r.col(i), s[l]) - u[l][i], 2);
     }
     out->force_order_cv.push_back({order, 0, 0, 0, std::sqrt(sq / n)});
   }
   if (!out->force_order_cv.empty()) {
-    const std::size_t pick = most_parsimonious(out->force_order_cv, u_scale);
+    const std::size_t pick = most_parsimonious(out->force_order_cv, u_scale, options.noise_floor);
     out->force_order = out->force_order_cv[pick].force_order;
     out->contact_cv_rms = out->force_order_cv[pick].rms;
   }
   if (out->force_order == 0)
-    throw std::runtime_error(
+    throw std::invalid_argument(
         fmt::format("cross-validation of eqs. 25-27 needs more force levels than {} with {} folds; "
                     "raise surrogate.force_levels or lower surrogate.cv_folds",
                     n, k));
+  const Eigen::MatrixXd v = force_powers(s, out->force_order);
+  const ScaledLeastSquares ls(v, options.rank_threshold);
   out->contact.resize(3, out->force_order);
   for (int i = 0; i < 3; ++i) {
-    std::vector<double> ui(n);
+    Eigen::VectorXd ui(n);
     for (int l = 0; l < n; ++l) ui[l] = u[l][i] / u_scale;
     FitSummary summary;
     const Eigen::VectorXd r =
-        fit_force_polynomial(s, ui, out->force_order, options,
-                             fmt::format("eqs. 25-27 axis {} component {}", kAxis[axis], kAxis[i]), &summary);
+        fit_linear(ls, v, ui, options.noise_floor,
+                   fmt::format("eqs. 25-27 axis {} component {}", kAxis[axis], kAxis[i]), &summary);
     summaries->push_back(summary);
     for (int p = 0; p < out->force_order; ++p)
       out->contact(i, p) = r[p] * u_scale / std::pow(max_force, p + 1);
@@ -200,43 +219,23 @@ void choose_field_order(const std::vector<double>& s, const std::array<Eigen::Ma
         (l % k == f ? sh : st).push_back(s[l]);
         (l % k == f ? test : train).push_back(l);
       }
-      const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(force_powers(st, order));
+      const ScaledLeastSquares ls(force_powers(st, order), options.rank_threshold);
       const Eigen::MatrixXd vh = force_powers(sh, order);
       for (int i = 0; i < 3; ++i) {
         Eigen::MatrixXd yt(train.size(), ns), yh(test.size(), ns);
         for (std::size_t r = 0; r < train.size(); ++r) yt.row(r) = target[i].col(train[r]).transpose();
         for (std::size_t r = 0; r < test.size(); ++r) yh.row(r) = target[i].col(test[r]).transpose();
-        sq += (vh * qr.solve(yt) - yh).squaredNorm();
+        sq += (vh * ls.solve(yt) - yh).squaredNorm();
       }
     }
     out->field_order_cv.push_back({order, 0, 0, 0, u_scale * std::sqrt(sq / (static_cast<double>(ns) * n))});
   }
   if (out->field_order_cv.empty())
-    throw std::runtime_error(
+    throw std::invalid_argument(
         "cross-validation of eq. 28 needs more force levels; raise surrogate.force_levels");
-  const std::size_t pick = most_parsimonious(out->field_order_cv, u_scale);
+  const std::size_t pick = most_parsimonious(out->field_order_cv, u_scale, options.noise_floor);
   out->field_order = out->field_order_cv[pick].force_order;
   out->field_order_cv_rms = out->field_order_cv[pick].rms;
-}
-
-/// Eq. 28's spatial fit of one power's per-node coefficients by Ceres LM: min sum_s (psi(X_s) . c -
-/// target_s)^2.
-Eigen::VectorXd fit_spatial(const Eigen::MatrixXd& psi, const Eigen::VectorXd& target,
-                            const SurrogateFitOptions& options, const std::string& what,
-                            FitSummary* summary) {
-  const int nb = static_cast<int>(psi.cols());
-  std::vector<double> c(nb, 0.0);
-  ceres::Problem problem;
-  for (Eigen::Index s = 0; s < psi.rows(); ++s) {
-    std::vector<double> basis(nb);
-    for (int k = 0; k < nb; ++k) basis[k] = psi(s, k);
-    problem.AddResidualBlock(InducedFieldResidual::Create(std::move(basis), target[s]), nullptr, c.data());
-  }
-  ceres::Solver::Summary cs;
-  ceres::Solve(solver_options(options), &problem, &cs);
-  *summary = summarise(what, cs);
-  require_usable(*summary, cs);
-  return Eigen::Map<Eigen::VectorXd>(c.data(), nb);
 }
 
 }  // namespace
@@ -254,9 +253,8 @@ bool SurrogateFitOptions::IsValid(std::string* error) const {
   if (max_contact_order > 0 && !(contact_length > 0.0))
     return fail("contact_length must be > 0 with contact terms");
   if (cv_folds < 2) return fail("cv_folds must be >= 2");
-  if (max_num_iterations < 1) return fail("max_num_iterations must be >= 1");
-  if (!(function_tolerance >= 0.0) || !(gradient_tolerance >= 0.0) || !(parameter_tolerance >= 0.0))
-    return fail("the Ceres tolerances must be >= 0");
+  if (!(noise_floor >= 0.0 && noise_floor < 1.0)) return fail("noise_floor must be in [0, 1)");
+  if (!(rank_threshold > 0.0 && rank_threshold < 1.0)) return fail("rank_threshold must be in (0, 1)");
   return true;
 }
 
@@ -271,7 +269,13 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     if (static_cast<int>(data.displacement[j].size()) != nl)
       throw std::invalid_argument("fit_contact: one displacement field per level and axis expected");
     for (const core::PointMatrix& d : data.displacement[j])
-      if (d.rows() != ns) throw std::invalid_argument("fit_contact: a displacement field has the wrong size");
+      if (d.rows() != ns)
+        throw std::invalid_argument("fit_contact: a displacement field has the wrong size");
+      else if (!d.allFinite())
+        throw std::invalid_argument(fmt::format(
+            "fit_contact: the training displacements of axis {} hold a non-finite value; the full model's "
+            "solve did not converge, check its Newton iterations in the training lines",
+            kAxis[j]));
   }
   std::vector<double> s(nl);
   for (int l = 0; l < nl; ++l) s[l] = data.levels[l] / max_force;
@@ -315,77 +319,111 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& x, const Candidate& y) { return x.cols.size() < y.cols.size(); });
 
+  // Per axis: eqs. 25-27 at the contact node, the force order of eq. 28, and stage 1, every node's
+  // least-squares force polynomial (eqs. 25-27 at each node) in scaled units. With the Kronecker design
+  // psi (x) V, the joint least-squares fit of eq. 28 is psi^+ D V^+T: stage 1, then stage 2 below.
+  struct AxisData {
+    double u_scale = 1.0;                   ///< [m] the axis' largest trained displacement
+    Eigen::MatrixXd v;                      ///< L by field order: the force powers
+    std::array<Eigen::MatrixXd, 3> target;  ///< per component: #S by L, scaled data
+    std::array<Eigen::MatrixXd, 3> nodal;   ///< per component: #S by field order
+    std::array<bool, 3> noise{};            ///< the component's data all lie below the noise floor
+  };
+  std::array<AxisData, 3> axes;
   for (int j = 0; j < 3; ++j) {
     AxisFit& axis = out.axis[j];
-    double u_scale = 0.0;
+    AxisData& ad = axes[j];
+    ad.u_scale = 0.0;
     for (const core::PointMatrix& d : data.displacement[j])
-      u_scale = std::max(u_scale, d.cwiseAbs().maxCoeff());
-    if (!(u_scale > 0.0)) u_scale = 1.0;
+      ad.u_scale = std::max(ad.u_scale, d.cwiseAbs().maxCoeff());
+    if (!(ad.u_scale > 0.0)) ad.u_scale = 1.0;  // no response at all: every fit below is exactly zero
 
     std::vector<Eigen::Vector3d> uc(nl);
     for (int l = 0; l < nl; ++l) uc[l] = data.displacement[j][l].row(data.contact).transpose();
-    fit_contact_node(s, uc, u_scale, max_force, j, options, &axis, &out.summaries);
+    fit_contact_node(s, uc, ad.u_scale, max_force, j, options, &axis, &out.summaries);
 
-    std::array<Eigen::MatrixXd, 3> target;  // per component: #S by L, scaled data
     for (int i = 0; i < 3; ++i) {
-      target[i].resize(ns, nl);
-      for (int l = 0; l < nl; ++l) target[i].col(l) = data.displacement[j][l].col(i) / u_scale;
+      ad.target[i].resize(ns, nl);
+      for (int l = 0; l < nl; ++l) ad.target[i].col(l) = data.displacement[j][l].col(i) / ad.u_scale;
+      ad.noise[i] = ad.target[i].cwiseAbs().maxCoeff() <= options.noise_floor;
     }
-    choose_field_order(s, target, u_scale, options, &axis);
-    const int order = axis.field_order;
+    choose_field_order(s, ad.target, ad.u_scale, options, &axis);
+    ad.v = force_powers(s, axis.field_order);
+    const ScaledLeastSquares vls(ad.v, options.rank_threshold);
+    for (int i = 0; i < 3; ++i) ad.nodal[i] = vls.solve(ad.target[i].transpose()).transpose();
+  }
 
-    // Stage 1: every node's least-squares force polynomial (eqs. 25-27 at each node), in scaled units. With
-    // the Kronecker design psi (x) V, the joint least-squares fit of eq. 28 is psi^+ D V^+T: this stage, then
-    // stage 2.
-    const Eigen::MatrixXd v = force_powers(s, order);
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> vqr(v);
-    std::array<Eigen::MatrixXd, 3> nodal;  // per component: #S by order
-    for (int i = 0; i < 3; ++i) nodal[i] = vqr.solve(target[i].transpose()).transpose();
-
-    // Stage 2 cross-validation of (a, b) per component, in closed form (the same linear least-squares problem
-    // that Ceres solves below; a QR per fold and candidate serves the three components).
-    std::array<std::vector<double>, 3> sq;
-    for (int i = 0; i < 3; ++i) sq[i].assign(candidates.size(), 0.0);
-    for (int f = 0; f < k; ++f) {
-      const Eigen::MatrixXd psi_train = rows_where(psi, fold, f, false);
-      const Eigen::MatrixXd psi_test = rows_where(psi, fold, f, true);
-      for (std::size_t c = 0; c < candidates.size(); ++c) {
-        const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(columns(psi_train, candidates[c].cols));
-        const Eigen::MatrixXd test_basis = columns(psi_test, candidates[c].cols);
-        for (int i = 0; i < 3; ++i) {
-          const Eigen::MatrixXd coeff = qr.solve(rows_where(nodal[i], fold, f, false));
-          const Eigen::MatrixXd predicted = test_basis * coeff * v.transpose();  // held-out nodes by levels
-          sq[i][c] += (predicted - rows_where(target[i], fold, f, true)).squaredNorm();
-        }
+  // Stage 2 cross-validation of (a, b, c) for every axis and component, in closed form: one factorisation per
+  // fold and candidate serves the nine (the basis depends on the surface nodes only).
+  std::array<std::array<std::vector<double>, 3>, 3> sq;  // [axis][component][candidate]
+  for (auto& axis_sq : sq)
+    for (auto& component_sq : axis_sq) component_sq.assign(candidates.size(), 0.0);
+  for (int f = 0; f < k; ++f) {
+    const Eigen::MatrixXd psi_train = rows_where(psi, fold, f, false);
+    const Eigen::MatrixXd psi_test = rows_where(psi, fold, f, true);
+    std::array<std::array<Eigen::MatrixXd, 3>, 3> nodal_train, target_test;
+    for (int j = 0; j < 3; ++j)
+      for (int i = 0; i < 3; ++i) {
+        nodal_train[j][i] = rows_where(axes[j].nodal[i], fold, f, false);
+        target_test[j][i] = rows_where(axes[j].target[i], fold, f, true);
       }
+    for (std::size_t c = 0; c < candidates.size(); ++c) {
+      const ScaledLeastSquares ls(columns(psi_train, candidates[c].cols), options.rank_threshold);
+      const Eigen::MatrixXd test_basis = columns(psi_test, candidates[c].cols);
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) {
+          const Eigen::MatrixXd predicted =  // held-out nodes by levels
+              test_basis * ls.solve(nodal_train[j][i]) * axes[j].v.transpose();
+          sq[j][i][c] += (predicted - target_test[j][i]).squaredNorm();
+        }
     }
+  }
+
+  // The fits themselves: on every surface node, one linear least-squares problem per force power, the
+  // factorisation of each chosen basis shared by the components and axes that chose it.
+  std::map<std::size_t, ScaledLeastSquares> factorised;
+  for (int j = 0; j < 3; ++j) {
+    AxisFit& axis = out.axis[j];
+    const AxisData& ad = axes[j];
+    const int order = axis.field_order;
+    const Eigen::MatrixXd sigma_powers = force_powers(data.levels, order);  // L by order, sigma in N
     Eigen::MatrixXd reconstructed_sq = Eigen::MatrixXd::Zero(ns, nl);
     for (int i = 0; i < 3; ++i) {
       InducedFieldFit& field = axis.field[i];
       for (std::size_t c = 0; c < candidates.size(); ++c)
         field.grid.push_back({order, candidates[c].a, candidates[c].b, candidates[c].c,
-                              u_scale * std::sqrt(sq[i][c] / (static_cast<double>(ns) * nl))});
-      const std::size_t best = most_parsimonious(field.grid, u_scale);
+                              ad.u_scale * std::sqrt(sq[j][i][c] / (static_cast<double>(ns) * nl))});
+      // A component of noise (an x force's response across a symmetric body, say) is zero, with the
+      // smallest basis (candidates[0], the constant): nothing to choose, nothing to fit.
+      const std::size_t best =
+          ad.noise[i] ? 0 : most_parsimonious(field.grid, ad.u_scale, options.noise_floor);
       field.tangential_order = candidates[best].a;
       field.normal_order = candidates[best].b;
       field.contact_order = candidates[best].c;
       field.cv_rms = field.grid[best].rms;
 
-      // The fit itself: Ceres LM on every surface node, one problem per force power.
       const Eigen::MatrixXd basis = columns(psi, candidates[best].cols);
+      auto it = factorised.find(best);
+      if (it == factorised.end())
+        it = factorised.emplace(best, ScaledLeastSquares(basis, options.rank_threshold)).first;
       field.coefficients.resize(basis.cols(), order);
       for (int p = 0; p < order; ++p) {
+        const std::string what =
+            fmt::format("eq. 28 axis {} component {} power {}", kAxis[j], kAxis[i], p + 1);
         FitSummary summary;
-        const Eigen::VectorXd c = fit_spatial(
-            basis, nodal[i].col(p), options,
-            fmt::format("eq. 28 axis {} component {} power {}", kAxis[j], kAxis[i], p + 1), &summary);
+        Eigen::VectorXd c;
+        if (ad.noise[i]) {
+          summary = below_noise_floor(what, ad.nodal[i].col(p), static_cast<int>(basis.cols()));
+          c = Eigen::VectorXd::Zero(basis.cols());
+        } else {
+          c = fit_linear(it->second, basis, ad.nodal[i].col(p), options.noise_floor, what, &summary);
+        }
         out.summaries.push_back(summary);
-        field.coefficients.col(p) = c * u_scale / std::pow(max_force, p + 1);
+        field.coefficients.col(p) = c * ad.u_scale / std::pow(max_force, p + 1);
       }
       // Reconstruction over the training data in SI: u_i(X_s, sigma_l) = psi_s . C sigma_l powers.
-      const Eigen::MatrixXd sigma_powers = force_powers(data.levels, order);  // L by order, sigma in N
       const Eigen::MatrixXd u_fit = basis * field.coefficients * sigma_powers.transpose();
-      reconstructed_sq += (u_fit - target[i] * u_scale).cwiseAbs2();
+      reconstructed_sq += (u_fit - ad.target[i] * ad.u_scale).cwiseAbs2();
     }
     axis.training_rms = std::sqrt(reconstructed_sq.sum() / (static_cast<double>(ns) * nl));
   }

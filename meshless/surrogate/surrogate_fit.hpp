@@ -1,6 +1,6 @@
 #pragma once
-// Levenberg-Marquardt fits of the force -> displacement surrogate (paper §3, eqs. 25-28) with Ceres, and the
-// k-fold cross-validation that picks their orders (lambda, a, b). docs/SURROGATE.md §3 explains the model.
+// Fits of the force -> displacement surrogate (paper §3, eqs. 25-28) and the k-fold cross-validation that
+// picks their orders (lambda, a, b, c). docs/SURROGATE.md §3 explains the model.
 //
 // For one contact node and one force axis j (x, y or z) the training data are the displacements of every
 // surface node at signed force levels sigma_l along j. Two functions are fitted:
@@ -10,7 +10,11 @@
 //  with
 //    psi the surface-local polynomial of orders (a_i, b_i) plus contact terms of order c_i
 //    (meshless/surrogate/surrogate_basis.hpp).
+// Both are linear in their coefficients, so every fit is a linear least-squares problem, solved directly by
+// ScaledLeastSquares (column-scaled, rank-revealing QR): it cannot fail, and a term the data cannot determine
+// is dropped instead of failing the surrogate (docs/SURROGATE.md §3, "Why linear least squares").
 #include <Eigen/Core>
+#include <Eigen/QR>
 #include <array>
 #include <string>
 #include <vector>
@@ -29,15 +33,41 @@ struct SurrogateFitOptions {
   double contact_length = 0.0;   ///< [m] l of the contact terms (> 0 when max_contact_order > 0)
   int cv_folds = 5;              ///< k of the k-fold cross-validation
   unsigned cv_seed = 1;          ///< partition of the surface nodes into folds (deterministic)
-  // Ceres Levenberg-Marquardt. The fitted problems are linear least squares in scaled units (O(1)
-  // coefficients), so LM stops after a few iterations on the function tolerance.
-  int max_num_iterations = 100;
-  double function_tolerance = 1e-14;
-  double gradient_tolerance = 1e-16;
-  double parameter_tolerance = 1e-12;
+  /// Data below this fraction of the axis' largest trained displacement are noise: a component (eqs. 25-27 at
+  /// the contact node, or eq. 28 over the surface) or a force power of eq. 28 whose data all lie below it is
+  /// fitted as zero, and cross-validation errors below it count as equal (the smallest model wins). The full
+  /// model solves to a relative Newton residual of 1e-8 (EfgOptions::newton_tolerance), so a response below
+  /// 1e-7 of the main one is not resolved by the training; the thread count moves the training data by far
+  /// less (3e-16 on the lung, docs/SURROGATE.md §3).
+  double noise_floor = 1e-7;
+  /// Rank threshold of the QR with column pivoting, on unit-norm columns: a pivot below this fraction of the
+  /// largest one marks its column as (numerically) a combination of the columns before it, and the column is
+  /// dropped (coefficient 0). ScaledLeastSquares.
+  double rank_threshold = 1e-10;
 
   /// True when usable; otherwise `error` (if not null) says which field is wrong and what was expected.
   bool IsValid(std::string* error) const;
+};
+
+/// min ||A X - B|| (Frobenius) for every column of B at once, by Householder QR with column pivoting of A
+/// with its columns scaled to unit norm. Scaling first makes the pivots comparable (a column of s^4 or xi^6
+/// is not mistaken for a dependent one because its values are small), so the rank the pivots reveal is a
+/// property of the basis, not of its units. Columns whose pivot is at most `rank_threshold` times the
+/// largest, and zero columns, are dropped: their rows of X are exactly 0 (the basic solution). The solve is
+/// direct and cannot fail; when B is exactly zero, X is exactly zero.
+class ScaledLeastSquares {
+ public:
+  ScaledLeastSquares(const Eigen::MatrixXd& a, double rank_threshold);
+  /// A.cols() by B.cols(); `b` has A.rows() rows.
+  Eigen::MatrixXd solve(const Eigen::MatrixXd& b) const;
+  int rank() const { return static_cast<int>(rank_); }
+  int cols() const { return static_cast<int>(inverse_scale_.size()); }
+
+ private:
+  Eigen::VectorXd inverse_scale_;  ///< 1 / |column|, 0 for a zero column
+  Eigen::Index rows_ = 0;
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr_;  ///< of the scaled columns
+  Eigen::Index rank_ = 0;
 };
 
 /// The full model's displacements for one contact node: for each axis j, one #S by 3 matrix per level [m].
@@ -56,14 +86,17 @@ struct CvScore {
   double rms = 0.0;          ///< RMS of the held-out errors [m]
 };
 
-/// What Ceres reported for one fit (ceres::Solver::Summary, kept for the surrogate file and the fit report).
+/// How one fit went (kept for the surrogate file, `contacts[].ceres_summaries`, and the fit report).
 struct FitSummary {
-  std::string what;         ///< e.g. "eqs. 25-27 axis x" or "eq. 28 axis x component y power 2"
-  std::string termination;  ///< CONVERGENCE, NO_CONVERGENCE, FAILURE, ...
+  std::string what;  ///< e.g. "eqs. 25-27 axis x" or "eq. 28 axis x component y power 2"
+  /// SOLVED (the linear least-squares solution) or BELOW_NOISE_FLOOR (the data are noise: fitted as zero).
+  /// Files fitted before the linear solve hold Ceres' terminations (CONVERGENCE, ...).
+  std::string termination;
   bool usable = false;
-  int iterations = 0;
-  double initial_cost = 0.0, final_cost = 0.0;  ///< in scaled units (0.5 sum r^2)
+  int iterations = 0;                           ///< 0: a direct solve (Ceres' count in older files)
+  double initial_cost = 0.0, final_cost = 0.0;  ///< in scaled units (0.5 sum r^2): at zero, at the solution
   int num_residuals = 0, num_parameters = 0;
+  int rank = -1;  ///< columns kept by the rank-revealing QR (-1: not recorded, older files)
 };
 
 /// Eq. 28 for one displacement component.
@@ -98,7 +131,8 @@ struct ContactFit {
 };
 
 /// Fit eqs. 25-28 for one contact node. `max_force` [N] scales the forces (the trained range is
-/// [-max_force, max_force]). Throws std::runtime_error when Ceres reports an unusable fit.
+/// [-max_force, max_force]). Throws std::invalid_argument on inconsistent input or too few levels or nodes
+/// for the cross-validation; the fits themselves cannot fail (a component of noise gets zero coefficients).
 ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& data, double max_force,
                        const SurrogateFitOptions& options);
 
