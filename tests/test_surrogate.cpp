@@ -1,7 +1,9 @@
-// The force -> displacement surrogate (paper §3, eqs. 25-28): the fits recover known fields, Ceres agrees
-// with the closed-form least squares, restarting the full model equals a fresh one, the query superposes the
-// axes and flags what it was not trained on, and the file refuses what it cannot trust. The comparison with
-// the full model at untrained forces is tests/test_surrogate_box.cpp (label long).
+// The force -> displacement surrogate (paper §3, eqs. 25-28): the fits recover known fields, the paper's
+// Marquardt (Ceres LM) reaches the linear least-squares solution the fit computes, restarting the full model
+// equals a fresh one, the query superposes the axes and flags what it was not trained on, the file refuses
+// what it cannot trust, and the shipped surrogate file loads and answers. The fit's robustness to rounding is
+// tests/test_surrogate_fit.cpp; the comparison with the full model at untrained forces is
+// tests/test_surrogate_box.cpp (label long).
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -119,8 +121,10 @@ TEST(SurrogateCostFunctions, ForcePolynomialRecoversACubicAndTheCrossValidationP
   }
 }
 
-TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheClosedFormLeastSquares) {
-  // A noisy field over random 3-D points: Ceres' minimiser of sum (psi . c - t)^2 is the QR solution.
+TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheLinearLeastSquares) {
+  // A noisy field over random 3-D points, on a basis of full rank: the paper's Marquardt (Ceres LM on the
+  // residuals of surrogate_cost_functions.hpp) reaches the minimiser of sum (psi . c - t)^2 that the fit
+  // computes directly (ScaledLeastSquares, docs/SURROGATE.md §3).
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   const SpatialBasis basis(4, 2, 1, 0.2);
@@ -147,7 +151,9 @@ TEST(SurrogateCostFunctions, CeresLevenbergMarquardtEqualsTheClosedFormLeastSqua
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
-  const Eigen::VectorXd exact = psi.colPivHouseholderQr().solve(target);
+  const ScaledLeastSquares ls(psi, SurrogateFitOptions{}.rank_threshold);
+  ASSERT_EQ(ls.rank(), basis.size());
+  const Eigen::VectorXd exact = ls.solve(target);
   const Eigen::VectorXd lm = Eigen::Map<Eigen::VectorXd>(c.data(), basis.size());
   EXPECT_LT((lm - exact).norm() / exact.norm(), 1e-8) << summary.BriefReport();
 }
@@ -228,8 +234,8 @@ const SurrogateData& synthetic_surrogate() {
   return data;
 }
 
-// The Fig. 9 column of `tissue reproduce`: one row per force, each the answer of a direct query, a force beyond
-// the trained range flagged, and a time per query that is positive and far below a millisecond.
+// The Fig. 9 column of `tissue reproduce`: one row per force, each the answer of a direct query, a force
+// beyond the trained range flagged, and a positive time per query (its size is the benchmark's business).
 TEST(SurrogateQuery, ReproduceTimesOneRowPerForceWithTheQuerysAnswer) {
   const Surrogate s(synthetic_surrogate());
   const core::SurrogateSpec spec = box_spec();
@@ -245,7 +251,6 @@ TEST(SurrogateQuery, ReproduceTimesOneRowPerForceWithTheQuerysAnswer) {
     EXPECT_GT(rows[i].at("contact_displacement_mm").get<double>(), 0.0);
     EXPECT_TRUE(rows[i].at("on_trained_contact").get<bool>());
     EXPECT_GT(rows[i].at("seconds").get<double>(), 0.0);
-    EXPECT_LT(rows[i].at("seconds").get<double>(), 1e-3);
   }
   EXPECT_TRUE(rows[1].at("force_in_range").get<bool>());
   EXPECT_FALSE(rows[2].at("force_in_range").get<bool>()) << "2 of 3 components beyond max_force are clamped";
@@ -385,6 +390,49 @@ TEST_F(SurrogateFile, MissingTruncatedEditedOrMismatchedFilesAreRefusedWithTheRe
   EXPECT_NE(error_of(mm).find("units"), std::string::npos) << error_of(mm);
 
   EXPECT_NO_THROW(read_surrogate(good, std::string("0123456789abcdef")));
+}
+
+// The shipped surrogate (results/surrogate/lung_surrogate.surrogate.json, docs/SURROGATE.md §6) loads through
+// the checked reader and answers: finite, the values computed once from this file, consistent with the
+// held-out comparison the file reports, and nothing at zero force (eqs. 25-28 have no constant term).
+TEST_F(SurrogateFile, TheShippedLungSurrogateLoadsAndAnswers) {
+  const std::string file =
+      std::string(TISSUE_SOURCE_DIR) + "/results/surrogate/lung_surrogate.surrogate.json";
+  SurrogateData d;
+  ASSERT_NO_THROW(d = read_surrogate(file, std::nullopt)) << error_of(file);
+  ASSERT_EQ(d.contacts.size(), 1u);
+  ASSERT_EQ(d.surface_position.rows(), 866);
+  const Surrogate s(d);
+  const int node = d.contacts[0].contact;
+  const Eigen::Vector3d x = d.surface_position.row(node).transpose();
+  core::PointMatrix u;
+
+  // The first held-out force of the file's report: the query against the full model's answer there.
+  const nlohmann::json& holdout = d.report.at("holdout").at(0);
+  const Eigen::Vector3d f(holdout.at("force_N")[0].get<double>(), holdout.at("force_N")[1].get<double>(),
+                          holdout.at("force_N")[2].get<double>());
+  const SurrogateResponse r = s.query(x, f, &u);
+  ASSERT_TRUE(u.allFinite());
+  EXPECT_TRUE(r.on_trained_contact);
+  EXPECT_TRUE(r.force_in_range);
+  EXPECT_EQ(r.contact_node, node);
+  EXPECT_LE(std::abs(r.contact_displacement.norm() - holdout.at("contact_displacement_m").get<double>()),
+            holdout.at("contact_error_m").get<double>() * (1 + 1e-9));
+  // The values this file gave when the test was written (printed with 17 digits): only rounding moves them.
+  const Eigen::Vector3d expected(-0.0018393711123677195, 0.00022848746724973121, -0.00054783172054346683);
+  EXPECT_LT((r.contact_displacement - expected).norm(), 1e-12 * expected.norm()) << r.contact_displacement;
+
+  // An oblique force, every axis superposed.
+  const SurrogateResponse o = s.query(x, {0.1, -0.25, 0.3}, &u);
+  ASSERT_TRUE(u.allFinite());
+  const Eigen::Vector3d oblique(0.0027254712723213392, -0.014173960683914192, 0.016735992362864771);
+  EXPECT_LT((o.contact_displacement - oblique).norm(), 1e-12 * oblique.norm()) << o.contact_displacement;
+  EXPECT_NEAR(o.max_surface_displacement, 0.02210028948894702, 1e-12 * 0.0221);
+  EXPECT_EQ(o.max_surface_node, node);
+
+  const SurrogateResponse zero = s.query(x, Eigen::Vector3d::Zero(), &u);
+  EXPECT_EQ(zero.contact_displacement.norm(), 0.0);
+  EXPECT_EQ(u.cwiseAbs().maxCoeff(), 0.0);
 }
 
 // The command line on a surrogate file: `tissue probe` answers good lines, reports malformed ones and goes
