@@ -65,6 +65,18 @@ FixedRegionSpec read_fixed_region(const JsonReader& r) {
     f.normal = n.normalized();
   }
   f.distance = r.positive("distance") * kMm;
+  f.support = r.choice("support", {"clamp", "elastic"}, std::string("clamp")) == "elastic"
+                  ? FixedRegionSpec::Support::elastic
+                  : FixedRegionSpec::Support::clamp;
+  if (f.support == FixedRegionSpec::Support::elastic) {
+    f.stiffness = r.in_range("stiffness", 0.0, 1e15, false, true);  // Pa/m, as stated
+    f.taper = r.in_range("taper", 0.0, f.distance / kMm, true, true, 0.0) * kMm;
+  } else {
+    for (const char* key : {"stiffness", "taper"})
+      if (r.has(key))
+        r.fail(key, "applies only to an elastic support; expected \"support\": \"elastic\" beside it, or no such "
+                    "key for a clamp");
+  }
   r.finish();
   return f;
 }
@@ -115,7 +127,7 @@ CutSpec read_cut(const JsonReader& r) {
   return c;
 }
 
-MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_size) {
+MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_size, const FixedRegionSpec& fixed) {
   MeshlessSpec m;
   m.node_spacing = fem_mesh_size;
   m.front_transition = fem_mesh_size * MeshlessSpec::kFrontTransitionPerSpacing;
@@ -125,6 +137,11 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
   m.support_factor = r->in_range("support_factor", 1.0, 10.0, true, true, defaults.support_factor);
   m.support_neighbours = r->integer("support_neighbours", 4, 100, defaults.support_neighbours);
   m.quadrature_order = r->integer("quadrature_order", 1, 8, defaults.quadrature_order);
+  // The penalty of eq. 23 approximates a clamp; an elastic support is the same term with alpha = k_s, exactly.
+  if (fixed.support == FixedRegionSpec::Support::elastic && r->has("penalty_factor"))
+    r->fail("penalty_factor", "applies only to a clamped fixed region; with /fixed_region/support \"elastic\" the "
+                              "EFG imposes the support exactly (alpha = /fixed_region/stiffness), so expected no "
+                              "penalty_factor here");
   m.penalty_factor = r->in_range("penalty_factor", 1.0, 1e12, true, true, defaults.penalty_factor);
   m.enrichment = r->choice("enrichment", {"enrichment", "visibility"}, defaults.enrichment);
   m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true,
@@ -202,7 +219,7 @@ Case parse_case(const nlohmann::json& document, const std::string& file) {
   c.time = read_time(root.object("time"));
   if (auto s = root.optional_object("samples")) c.samples = read_samples(*s);
   if (auto cut = root.optional_object("cut")) c.cut = read_cut(*cut);
-  c.meshless = read_meshless(root.optional_object("meshless"), c.geometry.mesh_size);
+  c.meshless = read_meshless(root.optional_object("meshless"), c.geometry.mesh_size, c.fixed_region);
   c.fem = read_fem(root.optional_object("fem"));
   c.output = read_output(root.optional_object("output"));
   c.surrogate = read_surrogate(root.optional_object("surrogate"), c.load);

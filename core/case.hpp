@@ -5,6 +5,7 @@
 // pascal-seconds and times in seconds. Case stores SI (metres) so both models compute in SI; results
 // report displacements in mm, as the paper does.
 #include <Eigen/Core>
+#include <cmath>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -28,13 +29,44 @@ struct GeometrySpec {
   double fixed_region_refinement = 0.45;
 };
 
-/// Which nodes are held fixed (essential boundary, eq. 19/23).
+/// Where and how the body is held (docs/CONFIG.md, "/fixed_region"; docs/MATERIAL.md §3).
+///
+/// Two supports, solved identically by both models:
+///  * clamp: u = 0 on the region (a Dirichlet condition in the FEM, the penalty of eq. 23 in the EFG). Its edge is a
+///    Dirichlet-free transition where the strain is singular (about r^-1/2), which caps both models' convergence and
+///    makes the EFG's answer depend on its penalty factor.
+///  * elastic: a Robin condition, traction t = -k_s(x) u over the region (a Winkler foundation standing for the
+///    attachment, e.g. the hilum's vessels and bronchi). It is a natural boundary term in both weak forms, so the
+///    FEM assembles it as a face integral and the EFG's eq. 23 becomes exactly this term with alpha = k_s(x): both
+///    models solve the same problem at every resolution. k_s may fall smoothly to zero over a band inside the region's
+///    edge (`taper`), so that the traction has no jump there.
 struct FixedRegionSpec {
   enum class Kind { near_point, near_plane };
+  enum class Support { clamp, elastic };
   Kind kind = Kind::near_point;
   Eigen::Vector3d point = Eigen::Vector3d::Zero();   ///< [m]
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ(); ///< unit, for near_plane
   double distance = 0.0;                              ///< [m]
+  Support support = Support::clamp;
+  double stiffness = 0.0;  ///< k_s [Pa/m] of an elastic support, inside the taper band
+  double taper = 0.0;      ///< [m] width of the band inside the region's edge over which k_s falls to 0
+
+  /// [m] how far x lies inside the region: distance - |x - point| (near_point) or distance - |(x - point).normal|
+  /// (near_plane). Non-negative inside; the region's edge is where it is 0.
+  double depth_inside(const Eigen::Vector3d& x) const {
+    const double metric = kind == Kind::near_point ? (x - point).norm() : std::abs((x - point).dot(normal));
+    return distance - metric;
+  }
+  /// k_s(x) [Pa/m] of an elastic support: the stated stiffness, times smoothstep(depth / taper) within the taper band
+  /// (C1 in x, so the traction -k_s u is continuous across the edge), 0 outside the region. The one definition both
+  /// models call.
+  double support_stiffness(const Eigen::Vector3d& x) const {
+    const double depth = depth_inside(x);
+    if (depth <= 0.0) return 0.0;
+    if (taper <= 0.0 || depth >= taper) return stiffness;
+    const double s = depth / taper;
+    return stiffness * s * s * (3.0 - 2.0 * s);
+  }
 };
 
 /// Traction patch: the surface point nearest `point`, the faces within `radius`, total force ramped.
@@ -81,7 +113,9 @@ struct MeshlessSpec {
   double support_factor = 2.0;
   int support_neighbours = 6;   ///< k
   int quadrature_order = 2;     ///< Gauss order per background tetrahedron
-  double penalty_factor = 1e3;  ///< alpha = penalty_factor * K1 / node_spacing  (eq. 23)
+  /// alpha = penalty_factor * K1 / node_spacing (eq. 23) of a clamped fixed region; an elastic support sets alpha =
+  /// k_s instead, and the case reader refuses this key with one.
+  double penalty_factor = 1e3;
   std::string enrichment = "enrichment";  ///< "enrichment" (eqs. 29–32) or "visibility"
   /// [m] l, over which the enrichment closes the cut at its front (meshless/cut/cut_weights.hpp). The default, 0, is the
   /// paper's function as it stands: the crack opens closest to the FEM's, but the points beside the front carry

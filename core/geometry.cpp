@@ -106,8 +106,7 @@ TetMesh mesh_volume(double size, double to_m, const std::function<void()>& after
 constexpr double kRegionTolerance = 5e-5;  // [m]; OCC intersection curves are accurate to ~1e-3 mm
 
 bool in_fixed_region(const FixedRegionSpec& r, const Eigen::Vector3d& x) {
-  if (r.kind == FixedRegionSpec::Kind::near_point) return (x - r.point).norm() <= r.distance + kRegionTolerance;
-  return std::abs((x - r.point).dot(r.normal)) <= r.distance + kRegionTolerance;
+  return r.depth_inside(x) >= -kRegionTolerance;
 }
 
 /// Tag fixed and load faces; errors name the case file and the JSON path of the selector. The mesh conforms to

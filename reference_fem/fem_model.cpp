@@ -57,6 +57,11 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
       result.sample_history.empty() ? Eigen::MatrixXd::Zero(sample_points.rows(), 3) : result.sample_history.back();
   result.vertex_displacements = vertex_displacements(solver.dof_handler(), solver.solution(), mesh);
   if (options.probe_radius > 0.0) result.probe_strain = solver.strain_in_ball(options.probe_centre, options.probe_radius);
+  if (options.support_region) {
+    const core::FixedRegionSpec region = *options.support_region;
+    result.support_edge_strain =
+        solver.strain_where([&](const Eigen::Vector3d& x) { return std::abs(region.depth_inside(x)) <= kSupportEdgeBand; });
+  }
   result.smallest_margin = solver.smallest_margin();
   result.material_k = parameters.material.k;
   result.min_step = parameters.newton.min_step;
@@ -71,7 +76,14 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
 CaseProblem problem_from_case(const core::Case& c, const core::TetMesh& mesh) {
   const core::LoadProgram program = core::load_program(c, mesh);
   CaseProblem problem;
-  problem.conditions.dirichlet.push_back(DirichletCondition{});  // the fixed region: u = 0 on every component
+  if (c.fixed_region.support == core::FixedRegionSpec::Support::clamp) {
+    problem.conditions.dirichlet.push_back(DirichletCondition{});  // the fixed region: u = 0 on every component
+  } else {
+    ElasticSupportCondition support;  // the fixed region: t = -k_s(x) u, k_s as the case defines it
+    const core::FixedRegionSpec region = c.fixed_region;
+    support.stiffness = [region](const Eigen::Vector3d& x) { return region.support_stiffness(x); };
+    problem.conditions.supports.push_back(support);
+  }
   TractionCondition load;
   load.boundary_id = boundary_id::load;
   load.traction = program.traction;
@@ -95,6 +107,7 @@ FemRunResult run_case(const core::Case& c, const core::Geometry& geometry, const
   const CaseProblem problem = problem_from_case(c, geometry.fem_mesh);
   FemRunOptions run = options;
   if (!run.cut && geometry.cut) run.cut = &*geometry.cut;
+  if (!run.support_region) run.support_region = &c.fixed_region;
   if (!(run.probe_radius > 0.0)) {
     run.probe_centre = geometry.load_centre;
     run.probe_radius = c.load.radius;

@@ -33,10 +33,15 @@ struct FemRunOptions {
   std::function<void(const StepReport&)> on_step;  ///< progress callback after every converged step
   /// When not null, samples behind the crack front are evaluated on the lip core::RuledSurface::side gives them.
   const core::RuledSurface* cut = nullptr;
+  /// run_case only: measure FemRunResult::support_edge_strain around this region's edge (null: none).
+  const core::FixedRegionSpec* support_region = nullptr;
   /// When radius > 0, measure the strain within this ball at the last step (FemRunResult::probe_strain).
   Eigen::Vector3d probe_centre = Eigen::Vector3d::Zero();  ///< [m]
   double probe_radius = 0.0;                               ///< [m]
 };
+
+/// [m] half-width of the band around the fixed region's edge over which FemRunResult::support_edge_strain is taken.
+constexpr double kSupportEdgeBand = 5e-3;
 
 struct FemRunResult {
   Eigen::MatrixXd sample_displacements;  ///< #samples by 3 at the last step [m]
@@ -55,6 +60,9 @@ struct FemRunResult {
   std::vector<unsigned int> cells_per_process;  ///< locally owned cells of each process (the partition)
   Eigen::MatrixXd vertex_displacements;  ///< #mesh vertices by 3 at the last step [m]
   BallStrain probe_strain;  ///< strain within FemRunOptions::probe_radius of probe_centre at the last step
+  /// run_case only: the strain within kSupportEdgeBand of the fixed region's edge (inside or out) at the last step,
+  /// where a clamp's strain is singular; an elastic support's stays bounded under refinement (docs/MATERIAL.md §3).
+  BallStrain support_edge_strain;
   core::SmallestMargin smallest_margin;  ///< smallest 1 + 2k lambda over the converged steps, and where
   double material_k = 0.0;  ///< the law's k, which sets the limit -1/(2k) of smallest_margin
   double min_step = 0.0;    ///< [s] the smallest step a failed step could be cut back to (0: no cut-back)

@@ -49,9 +49,19 @@ struct TractionCondition {
   VectorField field;
 };
 
+/// Elastic (Robin) support: traction t = -stiffness(x) u [Pa] on every face with the boundary id, a spring bed
+/// standing for the tissue that holds the organ (core::FixedRegionSpec, support "elastic"). It adds
+/// int k_s phi_i . phi_j dA to the tangent and int k_s u . phi_i dA to the internal force, so the support's
+/// reactions are part of the internal force as a clamp's are.
+struct ElasticSupportCondition {
+  unsigned int boundary_id = boundary_id::fixed;
+  std::function<double(const Eigen::Vector3d&)> stiffness;  ///< k_s(x) [Pa/m], x [m]
+};
+
 struct BoundaryConditions {
   std::vector<DirichletCondition> dirichlet;
   std::vector<TractionCondition> tractions;
+  std::vector<ElasticSupportCondition> supports;
 };
 
 /// How each Newton system K du = R (K = the consistent tangent, non-symmetric when k != 0) is solved.

@@ -150,6 +150,7 @@ struct ViscoelasticSolver::ScratchData {
   FEValues<3> fe_values;
   FEFaceValues<3> fe_face_values;
   std::vector<SymmetricTensor<2, 3>> strains;
+  std::vector<Tensor<1, 3>> face_displacements;  // u at the face quadrature points of an elastic support
   Eigen::MatrixXd B, DB;  // the B_q and D_q B_q JxW_q of all quadrature points, stacked (6 n_q by n)
   Eigen::MatrixXd K;
 };
@@ -282,9 +283,30 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
     for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = scratch.K(i, j);
   }
 
-  // Uniform tractions (the load patch: force(t) / patch area).
   for (const auto f : cell->face_indices()) {
     if (!cell->face(f)->at_boundary()) continue;
+    // Elastic supports: t = -k_s(x) u, a term of the internal force and of the tangent (k_s phi_i . phi_j).
+    for (const auto& support : conditions_.supports) {
+      if (cell->face(f)->boundary_id() != support.boundary_id) continue;
+      scratch.fe_face_values.reinit(cell, f);
+      const unsigned int n_face_q = scratch.fe_face_values.n_quadrature_points;
+      scratch.face_displacements.resize(n_face_q);
+      scratch.fe_face_values[u].get_function_values(ghosted_solution_, scratch.face_displacements);
+      for (unsigned int q = 0; q < n_face_q; ++q) {
+        const Point<3>& x = scratch.fe_face_values.quadrature_point(q);
+        const double ks_jxw = support.stiffness(Eigen::Vector3d(x[0], x[1], x[2])) * scratch.fe_face_values.JxW(q);
+        if (ks_jxw == 0.0) continue;
+        for (unsigned int i = 0; i < n; ++i) {
+          const Tensor<1, 3> phi_i = scratch.fe_face_values[u].value(i, q);
+          const double force = ks_jxw * (phi_i * scratch.face_displacements[q]);
+          copy.cell_rhs(i) -= force;
+          copy.cell_internal(i) += force;
+          for (unsigned int j = 0; j < n; ++j)
+            copy.cell_matrix(i, j) += ks_jxw * (phi_i * scratch.fe_face_values[u].value(j, q));
+        }
+      }
+    }
+    // Uniform tractions (the load patch: force(t) / patch area).
     for (const auto& t : conditions_.tractions) {
       if (cell->face(f)->boundary_id() != t.boundary_id) continue;
       const double s = t.scale ? t.scale(step_time_) : 1.0;
@@ -599,11 +621,14 @@ core::Vector6 ViscoelasticSolver::average_strain() const {
 }
 
 BallStrain ViscoelasticSolver::strain_in_ball(const Eigen::Vector3d& centre, double radius) const {
+  return strain_where([&](const Eigen::Vector3d& x) { return (x - centre).norm() <= radius; });
+}
+
+BallStrain ViscoelasticSolver::strain_where(const std::function<bool(const Eigen::Vector3d&)>& inside) const {
   BallStrain b;
   double weighted = 0.0;
-  const Point<3> c(centre.x(), centre.y(), centre.z());
   for_each_quadrature_point([&](const Point<3>& x, double jxw, const PointHistory& h) {
-    if (x.distance(c) > radius) return;
+    if (!inside(Eigen::Vector3d(x[0], x[1], x[2]))) return;
     const Eigen::Vector3d principal =
         Eigen::SelfAdjointEigenSolver<core::Matrix3>(core::voigt_to_strain(h.state.strain), Eigen::EigenvaluesOnly)
             .eigenvalues();

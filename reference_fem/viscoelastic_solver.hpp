@@ -93,6 +93,8 @@ class ViscoelasticSolver {
   core::Vector6 average_strain() const;
   /// The strain within `radius` [m] of `centre` (the material under the probe) at t_n.
   BallStrain strain_in_ball(const Eigen::Vector3d& centre, double radius) const;
+  /// The same measure over the quadrature points x [m] where inside(x) holds (e.g. a band around a region's edge).
+  BallStrain strain_where(const std::function<bool(const Eigen::Vector3d&)>& inside) const;
   /// Area of the faces with boundary id `id` [m^2] (on the straight-sided mesh).
   double boundary_area(unsigned int id) const;
 

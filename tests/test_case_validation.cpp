@@ -115,6 +115,29 @@ TEST_F(BadCase, EmptyFixedRegion) {
   expect_error(write_case(base_), {"/fixed_region", "selects no"});
 }
 
+TEST_F(BadCase, PenaltyFactorBesideAnElasticSupport) {
+  // The shipped lung holds its hilum by an elastic support, which both models impose exactly: a penalty factor
+  // there would be a knob with no effect.
+  ASSERT_EQ(base_["fixed_region"]["support"], "elastic");
+  base_["meshless"]["penalty_factor"] = 1000.0;
+  expect_error(write_case(base_), {"/meshless/penalty_factor", "applies only to a clamped fixed region"});
+}
+
+TEST_F(BadCase, ElasticSupportWithoutStiffness) {
+  base_["fixed_region"].erase("stiffness");
+  expect_error(write_case(base_), {"/fixed_region/stiffness", "required key is missing"});
+}
+
+TEST_F(BadCase, StiffnessOnAClamp) {
+  base_["fixed_region"]["support"] = "clamp";
+  expect_error(write_case(base_), {"/fixed_region/stiffness", "applies only to an elastic support"});
+}
+
+TEST_F(BadCase, SupportTaperWiderThanTheRegion) {
+  base_["fixed_region"]["taper"] = 50.0;  // the region's distance is 35 mm
+  expect_error(write_case(base_), {"/fixed_region/taper", "35"});
+}
+
 TEST_F(BadCase, FixedRegionFarFromTheBody) {
   base_["fixed_region"]["point"] = {500.0, 0.0, 0.0};
   expect_error(write_case(base_), {"/fixed_region", "from the surface"});

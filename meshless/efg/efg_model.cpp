@@ -209,7 +209,7 @@ void EfgModel::build_couplings(bool new_pattern) {
   stats_.num_cut_modified_nodes = cut_weights_ ? cut_weights_->num_modified() : 0;
   stats_.mean_nodes_per_point = nq > 0 ? static_cast<double>(volume_.num_entries()) / nq : 0.0;
   stats_.matrix_nonzeros = 9 * sparsity_->num_block_entries();
-  stats_.alpha = alpha_;
+  stats_.alpha = boundary_.largest_alpha;  // alpha_ for a clamp; an elastic support's largest k_s
   stats_.penalised_area = boundary_.penalised_area;
   stats_.loaded_area = boundary_.loaded_area;
 }

@@ -78,7 +78,7 @@ struct EfgStatistics {
   int num_cut_modified_nodes = 0;     ///< nodes whose weights the cut modifies (support meets the cut)
   double mean_nodes_per_point = 0.0;  ///< mean support size at the volume points
   long long matrix_nonzeros = 0;
-  double alpha = 0.0;                 ///< penalty parameter [Pa/m]
+  double alpha = 0.0;                 ///< penalty parameter [Pa/m] (an elastic support: its largest k_s)
   double penalised_area = 0.0, loaded_area = 0.0;  ///< [m^2]
   std::string linear_solver;
   /// The method behind linear_solver: direct, direct_umfpack, petsc_krylov or jacobi_bicgstab (never automatic).

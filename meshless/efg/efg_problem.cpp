@@ -18,6 +18,10 @@ EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
   p.quadrature_order = c.meshless.quadrature_order;
   p.node_spacing = c.meshless.node_spacing;
   p.penalty_factor = c.meshless.penalty_factor;
+  if (c.fixed_region.support == core::FixedRegionSpec::Support::elastic) {
+    const core::FixedRegionSpec region = c.fixed_region;
+    p.support_stiffness = [region](const Eigen::Vector3d& x) { return region.support_stiffness(x); };
+  }
   const core::LoadProgram program = core::load_program(c, p.mesh);
   const Eigen::Vector3d t = program.traction;
   p.traction = [t](const Eigen::Vector3d&) { return t; };

@@ -95,6 +95,10 @@ struct EfgProblem {
   /// Boundary roles per boundary face (#F). Empty -> derived from mesh.face_tags (fixed / load).
   std::vector<char> penalised_faces;
   std::vector<char> loaded_faces;
+  /// An elastic support (core::FixedRegionSpec, support "elastic"): when set, the penalised faces carry
+  /// alpha(x) = support_stiffness(x) [Pa/m] instead of alpha(). Eq. 23 with this alpha is the Robin term
+  /// t = -k_s u itself, so the support is imposed exactly, as the FEM reference imposes it.
+  std::function<double(const Eigen::Vector3d&)> support_stiffness;
   /// u-bar on the penalised faces (eq. 19, 23); empty -> zero. Held constant in time.
   VectorField prescribed_displacement;
   /// Traction t-bar [Pa] on the loaded faces at full load (eq. 24), scaled by load_scale(t).
@@ -123,7 +127,8 @@ struct EfgProblem {
   double alpha() const { return penalty_factor * material.K1 / node_spacing; }
 };
 
-/// The load case of a config: meshless_mesh of the geometry, zero u-bar on the fixed faces, uniform traction
+/// The load case of a config: meshless_mesh of the geometry, the fixed faces penalised (a clamp: alpha() and zero
+/// u-bar; an elastic support: alpha = k_s(x) of the case), uniform traction
 /// force(t) / A_patch on the load faces (core::load_program), and the geometry's cut (if any) with the case's
 /// treatment (/meshless/enrichment) and front transition (/meshless/front_transition).
 EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g);

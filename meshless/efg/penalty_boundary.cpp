@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace meshless {
@@ -40,12 +41,15 @@ BoundaryTerms make_boundary_terms(const EfgProblem& problem, const ShapeTable& s
     }
     const int f = surface.cells[q];
     if (role(problem.penalised_faces, core::FaceTag::fixed, f)) {
-      b.penalty_weight[q] = alpha * w;  // eq. 23
+      // eq. 23; an elastic support's alpha is its k_s(x), which makes the term its Robin condition exactly.
+      const double alpha_q = problem.support_stiffness ? problem.support_stiffness(x) : alpha;
+      b.penalty_weight[q] = alpha_q * w;
+      b.largest_alpha = std::max(b.largest_alpha, alpha_q);
       b.penalised_area += w;
       if (problem.prescribed_displacement) {
         const Eigen::Vector3d ubar = problem.prescribed_displacement(x);
         for (int s = surface.begin(q); s < surface.end(q); ++s)
-          b.penalty_load.segment<3>(3 * surface.nodes[s]) += alpha * w * surface.phi[s] * ubar;
+          b.penalty_load.segment<3>(3 * surface.nodes[s]) += alpha_q * w * surface.phi[s] * ubar;
       }
     }
     if (role(problem.loaded_faces, core::FaceTag::load, f)) {

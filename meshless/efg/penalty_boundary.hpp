@@ -19,6 +19,7 @@ struct BoundaryTerms {
   Eigen::VectorXd traction_load;        ///< 3N: int_Gt phi_i t-bar at full load (times load_scale(t))
   double penalised_area = 0.0;          ///< [m^2]
   double loaded_area = 0.0;             ///< [m^2]
+  double largest_alpha = 0.0;           ///< [Pa/m] the largest alpha on a penalised face (k_s of an elastic support)
 };
 
 /// Build the boundary terms from the face roles of `problem` (masks, or face_tags fixed/load); lip points carry
