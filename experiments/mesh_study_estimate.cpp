@@ -6,38 +6,64 @@
 #include <stdexcept>
 
 namespace experiments {
+namespace {
 
-MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm) {
+/// The observed order of levels a, b, c (coarse to fine) from the norms of their differences; 0 when the
+/// differences do not decrease.
+double observed_order(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const Eigen::MatrixXd& c, double ratio) {
+  const double d1 = (b - a).norm(), d2 = (c - b).norm();
+  return d2 > 0 && d1 > d2 ? std::log(d1 / d2) / std::log(ratio) : 0.0;
+}
+
+}  // namespace
+
+double expected_sample_order(const core::Case& c) {
+  const bool clamp = c.fixed_region.support == core::FixedRegionSpec::Support::clamp;
+  return clamp || c.cut ? 1.0 : 2.0;  // header
+}
+
+MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                           double expected_order) {
   if (u.size() != h_mm.size()) throw std::invalid_argument("estimate_remaining_error: one mesh size per level");
+  if (!(expected_order > 0.0)) throw std::invalid_argument("estimate_remaining_error: expected order must be > 0");
   MeshStudyEstimate e;
   if (u.size() < 3) return e;
   const std::size_t n = u.size();
-  const double d1 = (u[n - 2] - u[n - 3]).norm(), d2 = (u[n - 1] - u[n - 2]).norm(), finest = u[n - 1].norm();
+  nlohmann::json orders = nlohmann::json::array();
+  for (std::size_t l = 2; l < n; ++l)
+    orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], 0.5 * (h_mm[l - 2] / h_mm[l - 1] + h_mm[l - 1] / h_mm[l])));
+  const double d2 = (u[n - 1] - u[n - 2]).norm(), finest = u[n - 1].norm();
   const double ratio = 0.5 * (h_mm[n - 3] / h_mm[n - 2] + h_mm[n - 2] / h_mm[n - 1]);
-  constexpr double kAsymptoticOrder = 1.0;  // header
-  const double p = d2 > 0 && d1 > d2 ? std::log(d1 / d2) / std::log(ratio) : 0.0;
-  if (p >= kAsymptoticOrder) {
-    const double error = d2 / (std::pow(ratio, p) - 1.0) / finest;
-    e.json = {{"observed_order", p}, {"estimated_error_of_finest_relative", error}};
-    e.sentence = fmt::format("Richardson (last three levels): observed order {:.2f}, estimated remaining error of the "
-                             "finest level {:.2f} % of the sample displacements.",
-                             p, 100 * error);
-  } else if (d2 > 0) {
-    // Extrapolating with an order below the asymptotic one would blow the estimate up (order 0.2 gives 28 %).
-    const double error = d2 / (std::pow(ratio, kAsymptoticOrder) - 1.0) / finest;
-    const std::string why =
-        p > 0 ? fmt::format("observed order {:.2f} below 1", p) : std::string("differences not decreasing");
-    e.json = {{"note", why + ": not yet asymptotic; order 1 assumed for a bound"},
-              {"assumed_order", kAsymptoticOrder},
-              {"estimated_error_of_finest_relative", error}};
-    if (p > 0) e.json["observed_order_not_used"] = p;
-    e.sentence = fmt::format("Richardson: {} (not yet asymptotic). Assuming first-order convergence, the remaining "
-                             "error of the finest level is at most about {:.2f} % of the sample displacements.",
-                             why, 100 * error);
-  } else {
+  const double p = orders.back().get<double>();
+  if (d2 == 0.0) {
     e.json = {{"note", "the last two levels agree exactly"}};
     e.sentence = "Richardson: the last two levels agree exactly.";
+    return e;
   }
+  if (std::abs(p - expected_order) <= kOrderTolerance) {
+    const double error = d2 / (std::pow(ratio, p) - 1.0) / finest;
+    e.json = {{"kind", "richardson"}, {"observed_order", p}, {"expected_order", expected_order},
+              {"estimated_error_of_finest_relative", error}, {"observed_orders", orders}};
+    e.sentence = fmt::format("Richardson (last three levels): observed order {:.2f} (expected {:.0f}), estimated "
+                             "remaining error of the finest level {:.2f} % of the sample displacements.",
+                             p, expected_order, 100 * error);
+    return e;
+  }
+  const double error = d2 / (std::pow(ratio, expected_order) - 1.0) / finest;
+  const std::string why = p > 0 ? fmt::format("observed order {:.2f} {} the expected {:.0f} ± {}", p,
+                                              p < expected_order ? "below" : "above", expected_order, kOrderTolerance)
+                                : std::string("differences not decreasing");
+  e.json = {{"kind", "assumed_order"},
+            {"note", why + ": not in the asymptotic range; the estimate assumes the expected order and is not a bound"},
+            {"assumed_order", expected_order},
+            {"expected_order", expected_order},
+            {"estimated_error_of_finest_relative", error},
+            {"observed_orders", orders}};
+  if (p > 0) e.json["observed_order_not_used"] = p;
+  e.sentence = fmt::format("Richardson: {} (not in the asymptotic range). Assuming order {:.0f}, the remaining error "
+                           "of the finest level is about {:.2f} % of the sample displacements; this is an estimate, "
+                           "not a bound.",
+                           why, expected_order, 100 * error);
   return e;
 }
 

@@ -6,22 +6,38 @@
 #include <string>
 #include <vector>
 
+#include "core/case.hpp"
+
 namespace experiments {
 
+/// How far an observed order may sit from the expected one and still count as asymptotic.
+constexpr double kOrderTolerance = 0.3;
+
+/// The order at which a case's sample displacements converge under the study's refinement, set by the roughest
+/// line of the solution (docs/FEM_REFERENCE.md, "The order the samples converge at"): the samples lie away from
+/// it, so their error is the square of the energy error there, h^(2 lambda) for a singularity r^lambda.
+///  * a clamp's edge or a crack's front, r^(1/2): order 1;
+///  * otherwise (an elastic support, whose traction only jumps at the load patch's edge, u ~ r log r, and, untapered,
+///    at the support's edge): order 2.
+double expected_sample_order(const core::Case& c);
+
 struct MeshStudyEstimate {
-  /// {observed_order, estimated_error_of_finest_relative} for a Richardson estimate, or {note, assumed_order,
-  /// estimated_error_of_finest_relative[, observed_order_not_used]} for the first-order bound, or {note} when
-  /// the last two levels agree exactly. Empty with fewer than three levels.
+  /// Always (with three levels or more and the last two different): expected_order, estimated_error_of_finest_relative,
+  /// kind ("richardson" or "assumed_order"), observed_orders (one per consecutive three levels). Richardson
+  /// (observed order within kOrderTolerance of the expected one): observed_order. Otherwise: assumed_order (= the
+  /// expected order), observed_order_not_used when one was found, and a note saying that the figure is an estimate
+  /// outside the asymptotic range, not a bound. {note} alone when the last two levels agree exactly; empty with
+  /// fewer than three levels.
   nlohmann::json json;
   std::string sentence;  ///< the same for fem.md
 };
 
 /// `u[l]`: every sample displacement of level l (any shape, same for all levels), `h_mm[l]` its mesh size,
-/// coarse to fine. The samples converge at order 1 once asymptotic (the clamp's edge, an r^(1/2)
-/// singularity, limits the displacements away from it to order 2 x 1/2; docs/FEM_REFERENCE.md), so an observed
-/// order of at least 1 is extrapolated with, and anything less (a coarse level not yet asymptotic, or
-/// differences that do not shrink) gives the first-order bound instead. The error is relative to the finest
-/// level's norm.
-MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm);
+/// coarse to fine. The error is relative to the finest level's norm. An observed order within kOrderTolerance of
+/// `expected_order` is extrapolated with. Any other is not: an order below the expected one means a coarse level is
+/// not yet asymptotic (extrapolating with order 0.2 would give 28 %), and one above it would shrink the bar on
+/// the strength of a coincidence; the estimate then assumes the expected order and says so.
+MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                           double expected_order);
 
 }  // namespace experiments

@@ -62,7 +62,9 @@ std::vector<double> step_times(const UniaxialOptions& o) {
   return times;
 }
 
-UniaxialResult run_uniaxial(const UniaxialOptions& o, const BoundaryConditions& bc, bool creep, double load) {
+/// support_stiffness > 0: the x = 0 face is held by that elastic support, and its displacement is checked too.
+UniaxialResult run_uniaxial(const UniaxialOptions& o, const BoundaryConditions& bc, bool creep, double load,
+                            double support_stiffness = 0.0) {
   Triangulation<3> tria;
   make_bar(&tria);
   SolverParameters parameters;
@@ -87,6 +89,13 @@ UniaxialResult run_uniaxial(const UniaxialOptions& o, const BoundaryConditions& 
     result.max_relative_error = std::max(result.max_relative_error, std::abs(s.computed - s.exact) / std::abs(s.exact));
     result.max_newton_iterations = std::max(result.max_newton_iterations, report.newton_iterations);
     result.history.push_back(s);
+    if (support_stiffness > 0.0) {
+      Vector<double> u(3);
+      VectorTools::point_value(solver.mapping(), solver.dof_handler(), solver.solution(), Point<3>(0.0, 0.5, 0.5), u);
+      const double exact = load / support_stiffness;
+      result.max_support_relative_error =
+          std::max(result.max_support_relative_error, std::abs(u(0) - exact) / exact);
+    }
   });
   result.final_ball_strain = solver.strain_in_ball(Eigen::Vector3d(1.0, 0.5, 0.5), 0.4);
   return result;
@@ -137,6 +146,21 @@ UniaxialResult run_uniaxial_creep(const UniaxialOptions& options, double sigma0)
   t.traction = Eigen::Vector3d(sigma0, 0, 0);
   bc.tractions.push_back(t);
   return run_uniaxial(options, bc, true, sigma0);
+}
+
+UniaxialResult run_uniaxial_creep_on_elastic_support(const UniaxialOptions& options, double sigma0,
+                                                     double support_stiffness) {
+  BoundaryConditions bc = roller_planes();
+  bc.dirichlet.erase(bc.dirichlet.begin());  // the x = 0 roller gives way to the spring
+  ElasticSupportCondition spring;
+  spring.boundary_id = kXMin;
+  spring.stiffness = [support_stiffness](const Eigen::Vector3d&) { return support_stiffness; };
+  bc.supports.push_back(spring);
+  TractionCondition t;
+  t.boundary_id = kXMax;
+  t.traction = Eigen::Vector3d(sigma0, 0, 0);
+  bc.tractions.push_back(t);
+  return run_uniaxial(options, bc, true, sigma0, support_stiffness);
 }
 
 CantileverLevel run_cantilever(const CantileverOptions& o, int subdivisions) {

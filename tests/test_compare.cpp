@@ -172,48 +172,73 @@ experiments::Comparison synthetic_comparison(bool identical_variants) {
   return c;
 }
 
-/// Three levels of a study whose samples converge exactly as u(h) = u* + c h^p (ratio 1.5 between levels).
-std::vector<Eigen::MatrixXd> converging_levels(double order) {
+/// Three levels of a study whose samples converge exactly as u(h) = u* + c h^p (ratio 1.5 between levels, the
+/// coarsest at `coarsest_mm`).
+std::vector<Eigen::MatrixXd> converging_levels(double order, double coarsest_mm = 27.0) {
   Eigen::MatrixXd exact(2, 3), c(2, 3);
   exact << 1.0, 2.0, 3.0, -1.0, 0.5, 2.0;
   c << 0.3, -0.2, 0.1, 0.05, 0.2, -0.1;
   std::vector<Eigen::MatrixXd> u;
-  for (double h : {0.27, 0.18, 0.12}) u.push_back(exact + std::pow(h, order) * c);
+  for (double h_mm : {coarsest_mm, coarsest_mm / 1.5, coarsest_mm / 2.25})
+    u.push_back(exact + std::pow(h_mm / 100.0, order) * c);
   return u;
 }
 
-TEST(MeshStudyEstimate, RichardsonRecoversTheExactErrorAtOrderOneOrMore) {
+TEST(MeshStudyEstimate, RichardsonRecoversTheExactErrorAtTheExpectedOrder) {
   for (double order : {1.0, 2.0}) {
     const std::vector<Eigen::MatrixXd> u = converging_levels(order);
     Eigen::MatrixXd exact(2, 3);
     exact << 1.0, 2.0, 3.0, -1.0, 0.5, 2.0;
     const double true_error = (u[2] - exact).norm() / u[2].norm();
-    const MeshStudyEstimate e = estimate_remaining_error(u, {27, 18, 12});
+    const MeshStudyEstimate e = estimate_remaining_error(u, {27, 18, 12}, order);
     ASSERT_TRUE(e.json.contains("observed_order")) << e.json.dump();
+    EXPECT_EQ(e.json["kind"], "richardson");
     EXPECT_NEAR(e.json["observed_order"].get<double>(), order, 1e-9);
     EXPECT_NEAR(e.json["estimated_error_of_finest_relative"].get<double>(), true_error, 1e-9 * true_error);
+    // Within the tolerance of the expected order it is still Richardson with the observed one.
+    EXPECT_EQ(estimate_remaining_error(u, {27, 18, 12}, order + 0.25).json["kind"], "richardson");
   }
 }
 
-TEST(MeshStudyEstimate, AnOrderBelowOneOrGrowingDifferencesGiveTheFirstOrderBound) {
-  // Order 0.2 (a coarse level not yet asymptotic): extrapolating with it would give 6x the first-order bound.
+TEST(MeshStudyEstimate, AnOrderFarFromTheExpectedOneIsReportedAndNotExtrapolated) {
+  // Order 0.2 (a coarse level not yet asymptotic) where 1 is expected: extrapolating with it would give 6x the
+  // estimate at the expected order.
   const std::vector<Eigen::MatrixXd> slow = converging_levels(0.2);
-  const MeshStudyEstimate e = estimate_remaining_error(slow, {27, 18, 12});
+  const MeshStudyEstimate e = estimate_remaining_error(slow, {27, 18, 12}, 1.0);
   const double d2 = (slow[2] - slow[1]).norm() / slow[2].norm();
   EXPECT_FALSE(e.json.contains("observed_order"));
+  EXPECT_EQ(e.json["kind"], "assumed_order");
   EXPECT_NEAR(e.json["observed_order_not_used"].get<double>(), 0.2, 1e-9);
   EXPECT_EQ(e.json["assumed_order"].get<double>(), 1.0);
   EXPECT_NEAR(e.json["estimated_error_of_finest_relative"].get<double>(), d2 / 0.5, 1e-12);
-  EXPECT_NE(e.sentence.find("observed order 0.20 below 1"), std::string::npos) << e.sentence;
-  // Differences that grow: the same bound, no order.
+  EXPECT_NE(e.sentence.find("observed order 0.20 below the expected 1"), std::string::npos) << e.sentence;
+  EXPECT_NE(e.sentence.find("not a bound"), std::string::npos) << e.sentence;
+  // Order 2 where 1 is expected: not used either, since it would shrink the bar (d2 / 3.5 instead of d2 / 0.5).
+  const std::vector<Eigen::MatrixXd> fast = converging_levels(2.0);
+  const MeshStudyEstimate f = estimate_remaining_error(fast, {27, 18, 12}, 1.0);
+  EXPECT_EQ(f.json["kind"], "assumed_order");
+  EXPECT_NE(f.sentence.find("above the expected 1"), std::string::npos) << f.sentence;
+  EXPECT_NEAR(f.json["estimated_error_of_finest_relative"].get<double>(),
+              (fast[2] - fast[1]).norm() / fast[2].norm() / 0.5, 1e-12);
+  // Differences that grow: the same estimate, no order.
   std::vector<Eigen::MatrixXd> growing = {slow[0], slow[0] + 0.01 * slow[0], slow[0] + 0.05 * slow[0]};
-  const MeshStudyEstimate g = estimate_remaining_error(growing, {27, 18, 12});
+  const MeshStudyEstimate g = estimate_remaining_error(growing, {27, 18, 12}, 1.0);
   EXPECT_FALSE(g.json.contains("observed_order_not_used"));
   EXPECT_NE(g.json["note"].get<std::string>().find("differences not decreasing"), std::string::npos);
   // Two equal finest levels, and too few levels.
-  EXPECT_EQ(estimate_remaining_error({slow[0], slow[1], slow[1]}, {27, 18, 12}).json["note"],
+  EXPECT_EQ(estimate_remaining_error({slow[0], slow[1], slow[1]}, {27, 18, 12}, 1.0).json["note"],
             "the last two levels agree exactly");
-  EXPECT_TRUE(estimate_remaining_error({slow[0], slow[1]}, {27, 18}).json.is_null());
+  EXPECT_TRUE(estimate_remaining_error({slow[0], slow[1]}, {27, 18}, 1.0).json.is_null());
+}
+
+TEST(MeshStudyEstimate, FourLevelsReportTheOrderOfEachThree) {
+  std::vector<Eigen::MatrixXd> u = converging_levels(2.0);  // 27, 18, 12 mm
+  ASSERT_EQ(u.size(), 3u);
+  const std::vector<Eigen::MatrixXd> coarse = converging_levels(2.0, 40.5);  // 40.5, 27, 18 mm
+  u.insert(u.begin(), coarse.front());
+  const MeshStudyEstimate e = estimate_remaining_error(u, {40.5, 27, 18, 12}, 2.0);
+  ASSERT_EQ(e.json["observed_orders"].size(), 2u) << e.json.dump();
+  for (const auto& p : e.json["observed_orders"]) EXPECT_NEAR(p.get<double>(), 2.0, 1e-9);
 }
 
 TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {

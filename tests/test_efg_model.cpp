@@ -66,8 +66,22 @@ TEST(EfgModel, PatchTestIsPassedToRoundOff) {
 TEST(EfgModel, CreepBarFollowsAnalyticCurve) {
   const CreepReport r = run_creep_bar(40);
   std::cout << "creep bar: max relative error " << r.max_relative_error << " over " << r.times.size() << " steps\n";
-  EXPECT_LT(r.max_relative_error, 0.01);
-  EXPECT_NEAR(r.strain.front(), 100.0 / 6000.0, 1e-3 * 100.0 / 6000.0);  // instantaneous response sigma0/K1
+  // The linear field is reproduced; what remains is the recursion's time-step error (2.6e-5 at dt = 0.1 s).
+  EXPECT_LT(r.max_relative_error, 1e-4);
+  EXPECT_NEAR(r.strain.front(), 100.0 / 6000.0, 1e-6 * 100.0 / 6000.0);  // instantaneous response sigma0/K1
+}
+
+TEST(EfgModel, CreepBarOnAnElasticSupportMatchesClosedForm) {
+  // eq. 23 with alpha = k_s is the Robin term t = -k_s u itself: u_x(x, t) = sigma0 / k_s + x eps(t) is linear in
+  // x, which the linear basis reproduces, so the support is met to round-off and the strain keeps only the time
+  // discretisation's error.
+  const double k_s = 1e5;  // Pa/m: sigma0 / k_s = 1 mm, beside the bar's own 0.67 mm at t = 0
+  const CreepReport r = run_creep_bar(40, k_s);
+  std::cout << "creep bar on an elastic support: strain error " << r.max_relative_error << ", support error "
+            << r.max_support_relative_error << "\n";
+  EXPECT_LT(r.max_support_relative_error, 1e-12);  // 5e-15
+  EXPECT_LT(r.max_relative_error, 1e-4);            // 2.6e-5, as clamped
+  EXPECT_NEAR(r.strain.front(), 100.0 / 6000.0, 1e-6 * 100.0 / 6000.0);
 }
 
 TEST(EfgModel, SingularMomentMatrixIsReportedWithPointAndNeighbourCount) {

@@ -1,5 +1,6 @@
 // The FEM reference against closed forms (reference_fem/verification.hpp):
-//  * uniaxial relaxation and creep of the standard linear solid (paper Fig. 2, eqs. 9–13) < 0.5 %,
+//  * uniaxial relaxation (to round-off) and creep (to 1e-4, the time step's error) of the standard linear solid
+//    (paper Fig. 2, eqs. 9–13), also on an elastic support,
 //  * the Timoshenko cantilever in the elastic limit: L2 displacement error converges at rate >= 2.5
 //    for FE_SimplexP degree 2 (theory: 3).
 #include <gtest/gtest.h>
@@ -34,7 +35,8 @@ TEST(FemUniaxial, RelaxationMatchesClosedForm) {
   EXPECT_NEAR(r.history.back().computed, r.history.back().exact, 1e-6);
   std::cout << "relaxation: max relative error " << r.max_relative_error << ", max Newton iterations "
             << r.max_newton_iterations << "\n";
-  EXPECT_LT(r.max_relative_error, 5e-3);
+  // The one-internal-variable recursion is exact for a step strain held (eqs. 11-13): round-off only (3e-15).
+  EXPECT_LT(r.max_relative_error, kRelaxationTolerance);
   EXPECT_LE(r.max_newton_iterations, 2);  // k = 0: linear, one solve (+ possibly a round-off polish)
 }
 
@@ -47,7 +49,8 @@ TEST(FemUniaxial, CreepMatchesClosedForm) {
   ASSERT_EQ(r.history.size(), 151u);
   EXPECT_NEAR(r.history.front().computed, 100.0 / 2000.0, 1e-9);  // instantaneous response sigma0/K1
   std::cout << "creep: max relative error " << r.max_relative_error << "\n";
-  EXPECT_LT(r.max_relative_error, 5e-3);
+  // Under a held stress the strain varies within each step, which the recursion takes as linear: 6.4e-5 at tau/10.
+  EXPECT_LT(r.max_relative_error, kCreepTolerance);
   EXPECT_GT(r.history.back().computed, 2.9 * r.history.front().computed);  // creeps to sigma0 (1/K1 + 1/K2)
   // With nu = 0 the strain is diag(eps_xx, 0, 0) everywhere, so the probe measure (largest |principal strain|)
   // is eps_xx at every point of the ball: mean = peak = the closed form.
@@ -55,8 +58,26 @@ TEST(FemUniaxial, CreepMatchesClosedForm) {
   std::cout << "ball strain: mean " << r.final_ball_strain.mean << ", peak " << r.final_ball_strain.peak
             << ", exact " << eps << "\n";
   EXPECT_GT(r.final_ball_strain.volume, 0.0);
-  EXPECT_NEAR(r.final_ball_strain.mean, eps, 5e-3 * eps);
-  EXPECT_NEAR(r.final_ball_strain.peak, eps, 5e-3 * eps);
+  EXPECT_NEAR(r.final_ball_strain.mean, eps, kCreepTolerance * eps);
+  EXPECT_NEAR(r.final_ball_strain.peak, eps, kCreepTolerance * eps);
+}
+
+TEST(FemUniaxial, CreepOnAnElasticSupportMatchesClosedForm) {
+  // The bar held at x = 0 by a spring bed k_s (the elastic support of the lung cases, a Robin term) instead of a
+  // roller plane: u_x(x, t) = sigma0 / k_s + x eps(t). The spring's displacement is exact at every step (P2 holds the
+  // linear field); the strain keeps the time discretisation's error of the creep curve.
+  UniaxialOptions o;
+  o.material = soft_tissue(0.0);
+  o.end_time = 3.0;
+  o.steps = 150;
+  const double k_s = 1000.0;  // Pa/m: sigma0 / k_s = 0.1 m, comparable with the bar's own stretch
+  const UniaxialResult r = run_uniaxial_creep_on_elastic_support(o, 100.0, k_s);
+  ASSERT_EQ(r.history.size(), 151u);
+  std::cout << "creep on an elastic support: strain error " << r.max_relative_error << ", support displacement error "
+            << r.max_support_relative_error << "\n";
+  EXPECT_LT(r.max_support_relative_error, kSupportDisplacementTolerance);
+  EXPECT_LT(r.max_relative_error, kCreepTolerance);  // as the roller-held creep bar: 6.4e-5
+  EXPECT_NEAR(r.history.front().computed, 100.0 / 2000.0, 1e-9);
 }
 
 TEST(FemCantilever, L2ErrorConvergesAtRateThreeForDegreeTwo) {
