@@ -22,6 +22,9 @@ namespace meshless {
 namespace {
 
 /// Largest |a - b| over the processes, with b rank 0's vector.
+/// Every test here compares two processes with one: on any other count it fails (a skip would report "Passed").
+constexpr const char* kRunOnTwoProcesses = "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+
 double largest_difference_from_rank_zero(const Eigen::VectorXd& a) {
   Eigen::VectorXd rank_zero = a;
   MPI_Bcast(rank_zero.data(), static_cast<int>(rank_zero.size()), MPI_DOUBLE, 0, MPI_COMM_WORLD);
@@ -31,7 +34,7 @@ double largest_difference_from_rank_zero(const Eigen::VectorXd& a) {
 }
 
 TEST(EfgMpi, DistributedKrylovSolveReachesTheDirectSolutionWithNonzeroK) {
-  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  if (petsc_processes() != 2) GTEST_FAIL() << kRunOnTwoProcesses;
   // The 8^3 box with k = 2: an elastic step and two creep steps of 0.1 s.
   const Eigen::VectorXd direct = solve_sheared_box(8, LinearSolverKind::direct, nullptr, 2.0, 3);  // MUMPS, alone
   EfgStatistics stats;
@@ -50,7 +53,7 @@ TEST(EfgMpi, DistributedKrylovSolveReachesTheDirectSolutionWithNonzeroK) {
 }
 
 TEST(EfgMpi, AutomaticChoiceDistributesTheKrylovSolveRatherThanRepeatTheFactorisation) {
-  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  if (petsc_processes() != 2) GTEST_FAIL() << kRunOnTwoProcesses;
   // One process would factorise this small cloud (EfgLinearSolvers.AutomaticChoiceFactorisesSmallClouds...).
   EfgModel model(sheared_box_problem(5));
   model.setup_system();
@@ -61,7 +64,7 @@ TEST(EfgMpi, AutomaticChoiceDistributesTheKrylovSolveRatherThanRepeatTheFactoris
 TEST(EfgMpi, DistributedSolveRefusesADropToleranceAndSaysWhatToChange) {
   // The sparser preconditioner copy compares each entry with the diagonal of both its rows; a distributed solve
   // assembles only this process's rows, so the others' diagonal is not there to compare with.
-  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  if (petsc_processes() != 2) GTEST_FAIL() << kRunOnTwoProcesses;
   const core::PointMatrix nodes = sheared_box_problem(3).mesh.vertices;
   try {
     PetscKrylovSolver solver(nodes, kMlWithGcrSmoothersOptions, 1e-9, 100, 0.01);
@@ -76,7 +79,7 @@ TEST(EfgMpi, DistributedSolveRefusesADropToleranceAndSaysWhatToChange) {
 TEST(EfgMpi, EveryProcessGetsRankZerosNodeCloud) {
   // `mpirun -np N tissue solve meshless` meshes on rank 0 alone (reference_fem::build_on_rank_zero); every process
   // must then build the same EFG model, so the node cloud must arrive whole: vertices, cells, faces and their tags.
-  if (petsc_processes() != 2) GTEST_SKIP() << "run under mpirun -np 2 (ctest: test_efg_mpi_np2)";
+  if (petsc_processes() != 2) GTEST_FAIL() << kRunOnTwoProcesses;
   const EfgProblem box = sheared_box_problem(4);
   const core::Geometry g = reference_fem::build_on_rank_zero(
       [&] {
