@@ -235,6 +235,14 @@ TEST(SurrogateFitRounding, TrainingDataPerturbedAt1e12GiveTheSameOrdersAndCoeffi
   const SurrogateFitOptions options = fit_options(spec);
   const ContactTrainingData& data = box_training();
   const ContactFit reference = fit_contact(surface, data, spec.max_force, options);
+  int dropped = 0, columns = 0;
+  for (const FitSummary& f : reference.summaries) {
+    EXPECT_EQ(f.termination, "SOLVED") << f.what;  // real data: nothing below the noise floor
+    columns += f.num_parameters;
+    dropped += f.num_parameters - f.rank;
+  }
+  std::cout << "the box's fit: " << reference.summaries.size() << " linear least-squares fits, " << dropped
+            << " of " << columns << " basis columns dropped by the rank threshold\n";
 
   // worst: [0] eqs. 25-27, [1] eq. 28 (both in scaled units), [2] eq. 28 per power, [3] the surface nodes'
   // force polynomials that a query multiplies (per power)
