@@ -1,0 +1,88 @@
+#pragma once
+// The LRPIM model (Liu & Gu 2001; for soft tissue, Zhou et al., the paper's ref. [32]): RPIM trial functions
+// (meshless/lrpim/rpim_shape_functions.hpp) in the local Petrov-Galerkin weak form of Atluri's MLPG, one local
+// sub-domain per node with the cubic spline as the test function, the Kelvin law of core/kelvin_law.hpp with one
+// internal state per quadrature point, and Newton on the consistent tangent per time step. docs/LRPIM.md.
+#include <Eigen/Core>
+#include <Eigen/SparseCore>
+#include <functional>
+#include <vector>
+
+#include "core/kelvin_law.hpp"
+#include "meshless/lrpim/lrpim_problem.hpp"
+#include "meshless/mls/node_search.hpp"
+
+namespace meshless::lrpim {
+
+/// One quadrature point of a node's local weak form, with the trial functions tabulated there (the cloud does not
+/// move: small strain, so they are computed once).
+struct LocalIntegrationPoint {
+  int test_node = -1;       ///< the node whose equations this point contributes to
+  double weight = 0.0;      ///< [m^3] volume, [m^2] boundary
+  double v = 0.0;           ///< test function value
+  Eigen::Vector3d dv;       ///< grad v [1/m] (volume points)
+  Eigen::Vector3d normal;   ///< outward unit normal (reaction points on displacement faces); zero for volume
+  Eigen::Vector3d x;        ///< [m]
+  std::vector<int> support;                          ///< #n trial nodes
+  Eigen::Matrix<double, 3, Eigen::Dynamic> dphi;     ///< 3 by #n [1/m]
+};
+
+/// Per step: what Newton did.
+struct LrpimStepRecord {
+  double time = 0.0;  ///< [s]
+  int newton_iterations = 0;
+  double residual = 0.0;  ///< final ||R|| / reference
+};
+
+struct LrpimStatistics {
+  int num_nodes = 0, num_constrained_nodes = 0;
+  int num_volume_points = 0, num_reaction_points = 0, num_traction_points = 0;
+  double min_rcond = 1.0;  ///< smallest rcond of G met while tabulating
+  /// max over nodes of |int v n dA - int grad v dV| * r_q / int dV before the correction (0 for an exact rule)
+  double divergence_defect = 0.0;
+  double setup_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;
+};
+
+class LrpimModel {
+ public:
+  /// Tabulates the local quadrature and the RPIM functions of every point (throws SingularRpimMatrix or
+  /// std::invalid_argument naming what to change).
+  explicit LrpimModel(LrpimProblem problem);
+
+  /// Every step of problem().step_times; `on_step` (optional) is called after each converged step.
+  /// @throws std::runtime_error when Newton does not converge in 25 iterations (names the step and residual)
+  void run(const std::function<void(const LrpimModel&, const LrpimStepRecord&)>& on_step = {});
+
+  const LrpimProblem& problem() const { return problem_; }
+  const LrpimStatistics& statistics() const { return statistics_; }
+  const std::vector<LrpimStepRecord>& steps() const { return steps_; }
+  /// 3 #nodes: the nodal displacements (RPIM interpolates, so these are u(X_i)) [m]
+  const Eigen::VectorXd& nodal_displacements() const { return u_; }
+  const std::vector<bool>& constrained() const { return constrained_; }
+
+  Eigen::Vector3d displacement_at(const Eigen::Vector3d& x) const;  ///< [m]
+  core::Vector6 strain_at(const Eigen::Vector3d& x) const;          ///< engineering Voigt
+  const RpimShapeFunctions& shape_functions() const { return rpim_; }
+  const std::vector<LocalIntegrationPoint>& volume_points() const { return volume_; }
+
+ private:
+  void assemble(double time, double dt, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* r,
+                std::vector<core::KelvinState>* new_states);
+
+  LrpimProblem problem_;
+  NodeSearch search_;
+  RpimShapeFunctions rpim_;
+  core::KelvinLaw law_;
+  std::vector<bool> constrained_;                 ///< per node: on a displacement face
+  std::vector<LocalIntegrationPoint> volume_;     ///< local sub-domains
+  std::vector<LocalIntegrationPoint> reaction_;   ///< local boundaries on displacement faces
+  std::vector<LocalIntegrationPoint> traction_;   ///< local boundaries on traction faces (no trial functions)
+  std::vector<core::KelvinState> states_;         ///< volume points, then reaction points
+  Eigen::VectorXd u_;
+  double time_ = 0.0;
+  double constraint_scale_ = 0.0;
+  std::vector<LrpimStepRecord> steps_;
+  LrpimStatistics statistics_;
+};
+
+}  // namespace meshless::lrpim

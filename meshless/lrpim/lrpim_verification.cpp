@@ -1,0 +1,240 @@
+#include "meshless/lrpim/lrpim_verification.hpp"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <random>
+
+#include "core/kelvin_law.hpp"
+#include "meshless/lrpim/local_quadrature.hpp"
+#include "meshless/lrpim/lrpim_model.hpp"
+#include "meshless/mls/node_search.hpp"
+#include "meshless/verification/box_mesh.hpp"
+
+namespace meshless::lrpim {
+
+namespace {
+
+core::KelvinParameters tissue_material(double nu, double k) {
+  core::KelvinParameters m;
+  m.K1 = 6000.0;
+  m.K2 = 12000.0;
+  m.eta = 18000.0;
+  m.nu = nu;
+  m.k = k;
+  return m;
+}
+
+core::PointMatrix box_nodes(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, int nx, int ny, int nz,
+                            double jitter, unsigned seed) {
+  return make_box_mesh(lo, hi, nx, ny, nz, {}, jitter, seed).vertices;
+}
+
+}  // namespace
+
+RpimInvariantReport rpim_invariants(const RpimParameters& parameters, int points, unsigned seed) {
+  const double a = 0.01;
+  const core::PointMatrix nodes = box_nodes(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(0.1), 10, 10, 10, 0.2, seed);
+  NodeSearch search(nodes);
+  RpimShapeFunctions rpim(nodes, search, a, parameters);
+  RpimInvariantReport r;
+  r.num_nodes = static_cast<int>(nodes.rows());
+  r.num_points = points;
+  std::mt19937 gen(seed);
+  std::uniform_real_distribution<double> u(0.0, 0.1);
+  RpimEvaluation e;
+  for (int p = 0; p < points; ++p) {
+    const Eigen::Vector3d x(u(gen), u(gen), u(gen));
+    rpim.evaluate(x, true, &e);
+    r.min_rcond = std::min(r.min_rcond, e.rcond);
+    double sum = 0.0;
+    Eigen::Vector3d rep = Eigen::Vector3d::Zero(), gsum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d grep = Eigen::Matrix3d::Zero();
+    for (int k = 0; k < e.size(); ++k) {
+      const Eigen::Vector3d xi = nodes.row(e.nodes[k]).transpose();
+      sum += e.phi[k];
+      rep += e.phi[k] * xi;
+      gsum += e.dphi.col(k);
+      grep += xi * e.dphi.col(k).transpose();
+    }
+    r.max_partition_error = std::max(r.max_partition_error, std::abs(sum - 1.0));
+    r.max_reproduction_error = std::max(r.max_reproduction_error, (rep - x).norm() / a);
+    r.max_gradient_sum = std::max(r.max_gradient_sum, gsum.norm() * a);
+    r.max_gradient_reproduction = std::max(r.max_gradient_reproduction, (grep - Eigen::Matrix3d::Identity()).norm());
+  }
+  for (int j = 0; j < nodes.rows(); ++j) {
+    rpim.evaluate(nodes.row(j).transpose(), false, &e);
+    for (int k = 0; k < e.size(); ++k)
+      r.max_kronecker_error = std::max(r.max_kronecker_error, std::abs(e.phi[k] - (e.nodes[k] == j ? 1.0 : 0.0)));
+  }
+  return r;
+}
+
+LrpimPatchReport run_lrpim_patch_test(int cells, double alpha_q, int polar, int azimuthal, bool divergence_correction) {
+  const double edge = 0.05, spacing = edge / cells;
+  LrpimProblem p;
+  p.name = "lrpim patch test";
+  p.nodes = box_nodes(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(edge), cells, cells, cells, 0.2, 11);
+  p.body.lo = Eigen::Vector3d::Zero();
+  p.body.hi = Eigen::Vector3d::Constant(edge);
+  p.faces = {FaceCondition::displacement, FaceCondition::traction, FaceCondition::displacement,
+             FaceCondition::traction,     FaceCondition::displacement, FaceCondition::traction};
+  p.material = tissue_material(0.3, 0.0);
+  p.node_spacing = spacing;
+  p.alpha_q = alpha_q;
+  p.rule.polar = polar;
+  p.rule.azimuthal = azimuthal;
+  p.divergence_correction = divergence_correction;
+  const Eigen::Vector3d a0(1e-4, -2e-4, 3e-4);
+  Eigen::Matrix3d g;
+  g << 1e-3, 2e-4, -3e-4,  //
+      -1e-4, -2e-3, 5e-4,  //
+      4e-4, 1e-4, 1.5e-3;
+  const core::Vector6 eps_exact(g(0, 0), g(1, 1), g(2, 2), g(0, 1) + g(1, 0), g(1, 2) + g(2, 1), g(2, 0) + g(0, 2));
+  const core::KelvinLaw law(p.material);
+  const core::Matrix3 sigma = core::voigt_to_stress(law.elastic_matrix(p.material.K1) * eps_exact);
+  p.prescribed_displacement = [a0, g](const Eigen::Vector3d& x) -> Eigen::Vector3d { return a0 + g * x; };
+  // Traction faces are the +x, +y, +z planes: n = e_d of the coordinate that sits on edge.
+  p.traction = [sigma, edge](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+    int d = 0;
+    for (int k = 1; k < 3; ++k)
+      if (std::abs(x[k] - edge) < std::abs(x[d] - edge)) d = k;
+    return sigma * Eigen::Vector3d::Unit(d);
+  };
+  LrpimModel model(std::move(p));
+  model.run();
+  LrpimPatchReport r;
+  r.cells = cells;
+  r.num_nodes = model.statistics().num_nodes;
+  r.newton_iterations = model.steps().back().newton_iterations;
+  r.divergence_defect = model.statistics().divergence_defect;
+  std::mt19937 gen(5);
+  std::uniform_real_distribution<double> u(0.05 * edge, 0.95 * edge);
+  double max_err = 0.0, max_u = 0.0;
+  for (int i = 0; i < 500; ++i) {
+    const Eigen::Vector3d x(u(gen), u(gen), u(gen));
+    const Eigen::Vector3d exact = a0 + g * x;
+    max_err = std::max(max_err, (model.displacement_at(x) - exact).norm());
+    max_u = std::max(max_u, exact.norm());
+    r.strain_relative_error =
+        std::max(r.strain_relative_error, (model.strain_at(x) - eps_exact).norm() / eps_exact.norm());
+  }
+  r.max_relative_error = max_err / max_u;
+  double nodal = 0.0;
+  const core::PointMatrix& nodes = model.problem().nodes;
+  for (int i = 0; i < nodes.rows(); ++i) {
+    const Eigen::Vector3d x = nodes.row(i).transpose();
+    nodal = std::max(nodal, (model.nodal_displacements().segment<3>(3 * i) - (a0 + g * x)).norm());
+  }
+  r.nodal_relative_error = nodal / max_u;
+  return r;
+}
+
+LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, double alpha_q) {
+  const double L = 0.1, D = 0.02, T = 0.02, P = 1e-3;
+  const double h = D / nd;
+  LrpimProblem p;
+  p.name = "lrpim cantilever";
+  p.body.lo = Eigen::Vector3d(0.0, -D / 2, -T / 2);
+  p.body.hi = Eigen::Vector3d(L, D / 2, T / 2);
+  p.nodes = box_nodes(p.body.lo, p.body.hi, 5 * nd, nd, nd, 0.0, 1);
+  p.faces = {FaceCondition::displacement, FaceCondition::traction,     FaceCondition::free_surface,
+             FaceCondition::free_surface, FaceCondition::free_surface, FaceCondition::free_surface};
+  p.material = tissue_material(0.0, 0.0);
+  p.node_spacing = h;
+  p.rpim = rpim;
+  p.alpha_q = alpha_q;
+  const double E = p.material.K1, nu = p.material.nu, I = T * D * D * D / 12.0;
+  // Timoshenko & Goodier: clamped at x = 0, shear P at x = L (exact 3-D elasticity for nu = 0).
+  auto exact_u = [=](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+    const double X = x.x(), Y = x.y();
+    return Eigen::Vector3d(
+        -P * Y / (6 * E * I) * ((6 * L - 3 * X) * X + (2 + nu) * (Y * Y - D * D / 4)),
+        P / (6 * E * I) * (3 * nu * Y * Y * (L - X) + (4 + 5 * nu) * D * D * X / 4 + (3 * L - X) * X * X), 0.0);
+  };
+  auto exact_strain = [=](const Eigen::Vector3d& x) -> core::Vector6 {
+    const double X = x.x(), Y = x.y();
+    core::Vector6 e = core::Vector6::Zero();
+    e[0] = -P * (L - X) * Y / (E * I);
+    e[1] = -nu * e[0];
+    e[2] = -nu * e[0];
+    e[3] = P * (1 + nu) / (E * I) * (D * D / 4 - Y * Y);
+    return e;
+  };
+  p.prescribed_displacement = exact_u;
+  p.traction = [=](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+    return Eigen::Vector3d(0.0, P / (2 * I) * (D * D / 4 - x.y() * x.y()), 0.0);  // sigma_xy at x = L
+  };
+  const core::KelvinLaw law(p.material);
+  const core::Matrix6 C = law.elastic_matrix(E);
+  LrpimModel model(std::move(p));
+  model.run();
+  LrpimCantileverReport r;
+  r.cells_through_height = nd;
+  r.node_spacing = h;
+  r.num_nodes = model.statistics().num_nodes;
+  // Error norms on a 3-point Gauss grid over 5 nd x nd x nd cells: independent of the model's local quadrature.
+  std::vector<double> gx, gw;
+  gauss_legendre(3, &gx, &gw);
+  const int n[3] = {5 * nd, nd, nd};
+  const Eigen::Vector3d lo(0.0, -D / 2, -T / 2), size(L, D, T);
+  double e2 = 0, u2 = 0, en2 = 0, ee2 = 0;
+  for (int i = 0; i < n[0]; ++i)
+    for (int j = 0; j < n[1]; ++j)
+      for (int k = 0; k < n[2]; ++k)
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b)
+            for (int c = 0; c < 3; ++c) {
+              const Eigen::Vector3d cell(size[0] / n[0], size[1] / n[1], size[2] / n[2]);
+              const Eigen::Vector3d x = lo + Eigen::Vector3d((i + 0.5 + 0.5 * gx[a]) * cell[0],
+                                                             (j + 0.5 + 0.5 * gx[b]) * cell[1],
+                                                             (k + 0.5 + 0.5 * gx[c]) * cell[2]);
+              const double w = gw[a] * gw[b] * gw[c] * cell.prod() / 8.0;
+              const Eigen::Vector3d ue = exact_u(x);
+              const core::Vector6 ex = exact_strain(x), de = model.strain_at(x) - ex;
+              e2 += w * (model.displacement_at(x) - ue).squaredNorm();
+              u2 += w * ue.squaredNorm();
+              en2 += w * de.dot(C * de);
+              ee2 += w * ex.dot(C * ex);
+            }
+  r.l2_error = std::sqrt(e2 / u2);
+  r.energy_error = std::sqrt(en2 / ee2);
+  r.tip_deflection = model.displacement_at(Eigen::Vector3d(L, 0.0, 0.0)).y();
+  r.exact_tip_deflection = exact_u(Eigen::Vector3d(L, 0.0, 0.0)).y();
+  r.seconds = model.statistics().setup_seconds + model.statistics().assembly_seconds + model.statistics().solve_seconds;
+  return r;
+}
+
+LrpimCreepReport run_lrpim_creep_bar(double k, int steps) {
+  const double L = 0.04, a = 0.01, sigma0 = 100.0, t_end = 4.0;
+  LrpimProblem p;
+  p.name = "lrpim creep bar";
+  p.body.lo = Eigen::Vector3d::Zero();
+  p.body.hi = Eigen::Vector3d(L, a, a);
+  p.nodes = box_nodes(p.body.lo, p.body.hi, 8, 2, 2, 0.0, 1);
+  p.faces = {FaceCondition::displacement, FaceCondition::traction,     FaceCondition::free_surface,
+             FaceCondition::free_surface, FaceCondition::free_surface, FaceCondition::free_surface};
+  p.material = tissue_material(0.0, k);
+  p.node_spacing = a / 2;
+  p.prescribed_displacement = [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); };
+  p.traction = [sigma0](const Eigen::Vector3d&) { return Eigen::Vector3d(sigma0, 0.0, 0.0); };
+  p.step_times = {0.0};  // step load at t = 0: instantaneous response first
+  for (int n = 1; n <= steps; ++n) p.step_times.push_back(t_end * n / steps);
+  const core::KelvinParameters m = p.material;
+  LrpimCreepReport r;
+  r.k = k;
+  LrpimModel model(std::move(p));
+  model.run([&](const LrpimModel& mdl, const LrpimStepRecord& rec) {
+    const double u0 = mdl.displacement_at(Eigen::Vector3d(0.0, a / 2, a / 2)).x();
+    const double eps = (mdl.displacement_at(Eigen::Vector3d(L, a / 2, a / 2)).x() - u0) / L;
+    const double n_exact = sigma0 / m.K1 + sigma0 / m.K2 * (1.0 - std::exp(-m.K2 * rec.time / m.eta));
+    const double exact = k == 0.0 ? n_exact : (std::sqrt(1.0 + 4.0 * k * n_exact) - 1.0) / (2.0 * k);
+    r.times.push_back(rec.time);
+    r.strain.push_back(eps);
+    r.exact.push_back(exact);
+    r.max_relative_error = std::max(r.max_relative_error, std::abs(eps - exact) / exact);
+  });
+  r.num_nodes = model.statistics().num_nodes;
+  return r;
+}
+
+}  // namespace meshless::lrpim

@@ -1,0 +1,66 @@
+#pragma once
+// Verification problems of the LRPIM model with known answers (docs/LRPIM.md §4), the counterparts of the EFG's
+// (meshless/verification/verification_problems.hpp): RPIM invariants, the linear patch test, the Timoshenko
+// cantilever's convergence rates, and the closed-form creep of a bar at k = 0 and k != 0. Node clouds are the
+// vertices of meshless::make_box_mesh; its tets are not used.
+#include <vector>
+
+#include "meshless/lrpim/rpim_shape_functions.hpp"
+
+namespace meshless::lrpim {
+
+struct RpimInvariantReport {
+  int num_nodes = 0, num_points = 0;
+  double max_partition_error = 0.0;        ///< max |sum phi_i - 1|
+  double max_reproduction_error = 0.0;     ///< max |sum phi_i X_i - X| / spacing
+  double max_gradient_sum = 0.0;           ///< max |sum grad phi_i| * spacing
+  double max_gradient_reproduction = 0.0;  ///< max |sum X_i (x) grad phi_i - I|
+  double max_kronecker_error = 0.0;        ///< max_ij |phi_i(X_j) - delta_ij| over nodes X_j
+  double min_rcond = 1.0;                  ///< smallest rcond of G met
+};
+/// On the jittered 11^3 cloud of the EFG's invariants (spacing 10 mm, jitter 0.2), at `points` random points and
+/// at every node.
+RpimInvariantReport rpim_invariants(const RpimParameters& parameters = {}, int points = 2000, unsigned seed = 7);
+
+struct LrpimPatchReport {
+  int num_nodes = 0, cells = 0;
+  double max_relative_error = 0.0;     ///< max |u_h - u| / max |u| over random interior points
+  double nodal_relative_error = 0.0;   ///< same over the nodes (u_h(X_i) = U_i)
+  double strain_relative_error = 0.0;  ///< max |eps_h - eps| / |eps| at the random points
+  int newton_iterations = 0;
+  double divergence_defect = 0.0;      ///< LrpimStatistics::divergence_defect (before any correction)
+};
+/// Cube of edge 50 mm, `cells` per axis, interior nodes jittered by 0.2 cells; u = a + G X prescribed at the
+/// nodes of the -x, -y, -z faces, the traction sigma n of the exact constant stress on the +x, +y, +z faces
+/// (nu = 0.3, instantaneous elastic step). `alpha_q`, `rule`: the local domain and its quadrature.
+/// `divergence_correction`: LrpimProblem::divergence_correction.
+LrpimPatchReport run_lrpim_patch_test(int cells = 5, double alpha_q = 1.5, int polar = 8, int azimuthal = 16,
+                                      bool divergence_correction = true);
+
+struct LrpimCantileverReport {
+  int cells_through_height = 0, num_nodes = 0;
+  double node_spacing = 0.0;  ///< [m]
+  double l2_error = 0.0;      ///< ||u_h - u||_L2 / ||u||_L2 (tensor Gauss grid over the beam)
+  double energy_error = 0.0;  ///< ||eps_h - eps||_C / ||eps||_C
+  double tip_deflection = 0.0, exact_tip_deflection = 0.0;  ///< u_y at (L, 0, 0) [m]
+  double seconds = 0.0;       ///< set-up + assembly + solve
+};
+/// The EFG's cantilever (L 100 mm, D = T = 20 mm, K1 = 6000 Pa, nu = 0, shear P = 1 mN at x = L, parabolic):
+/// the exact Timoshenko & Goodier displacement prescribed at the x = 0 nodes, the exact parabolic traction at
+/// x = L, the other faces free; 5 nd by nd by nd cells of the box mesh's node grid (regular, no jitter).
+LrpimCantileverReport run_lrpim_cantilever(int cells_through_height, const RpimParameters& rpim = {},
+                                           double alpha_q = 1.5);
+
+struct LrpimCreepReport {
+  double k = 0.0;
+  std::vector<double> times, strain, exact;  ///< [s], (u_x(L) - u_x(0)) / L, closed form
+  double max_relative_error = 0.0;
+  int num_nodes = 0;
+};
+/// The EFG's creep bar (40 x 10 x 10 mm, 8 x 2 x 2 cells, nu = 0, K1 = 6000, K2 = 12000, eta = 18000): u = 0 at the
+/// x = 0 nodes, step traction sigma0 = 100 Pa at x = L from t = 0 (first step dt = 0), then `steps` steps to 4 s.
+/// The stress is uniaxial and uniform, so the law is linear in N(eps) = eps + k eps^2 (docs/MATERIAL.md §1.2):
+/// N(t) = sigma0/K1 + sigma0/K2 (1 - exp(-K2 t/eta)) and eps = (sqrt(1 + 4 k N) - 1) / (2 k) (eps = N at k = 0).
+LrpimCreepReport run_lrpim_creep_bar(double k = 0.0, int steps = 40);
+
+}  // namespace meshless::lrpim
