@@ -1,11 +1,9 @@
 #include "experiments/probe_commands.hpp"
 
 #include <fmt/format.h>
-#include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -14,51 +12,23 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
-#include <thread>
 
 #include "core/case.hpp"
 #include "experiments/progress.hpp"
+#include "experiments/realtime_loop.hpp"
 #include "meshless/surrogate/surrogate.hpp"
 #include "meshless/surrogate/surrogate_file.hpp"
 
 namespace experiments {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 struct ProbeArguments {
   std::string surrogate, config, trace, out;
   double rate = 1000.0;
   double contact_tolerance_mm = 0.0;
-  bool realtime = false;
-};
-
-/// SCHED_FIFO for the replay loop while it lives (a haptic thread's usual scheduling), the previous policy
-/// after.
-class RealtimeScheduling {
- public:
-  explicit RealtimeScheduling(bool wanted) {
-    if (!wanted) return;
-    previous_policy_ = sched_getscheduler(0);
-    sched_getparam(0, &previous_);
-    sched_param p{};
-    p.sched_priority = 50;
-    granted_ = sched_setscheduler(0, SCHED_FIFO, &p) == 0;
-    if (!granted_) error_ = std::strerror(errno);
-  }
-  ~RealtimeScheduling() {
-    if (granted_) sched_setscheduler(0, previous_policy_, &previous_);
-  }
-  std::string describe(bool wanted) const {
-    if (!wanted) return "default scheduling (--realtime not given)";
-    return granted_ ? "SCHED_FIFO priority 50" : "default scheduling (SCHED_FIFO refused: " + error_ + ")";
-  }
-
- private:
-  bool granted_ = false;
-  int previous_policy_ = SCHED_OTHER;
-  sched_param previous_{};
-  std::string error_;
+  bool realtime = true;
+  double spin_us = 100.0;
+  int cpu = -1;
 };
 
 /// One device sample: contact point [mm] and force [N].
@@ -165,12 +135,6 @@ std::vector<Sample> read_trace(const std::string& path) {
   return samples;
 }
 
-double percentile(std::vector<double> v, double p) {
-  std::sort(v.begin(), v.end());
-  const std::size_t rank = static_cast<std::size_t>(std::ceil(p / 100.0 * v.size()));
-  return v[std::clamp<std::size_t>(rank, 1, v.size()) - 1];  // nearest rank
-}
-
 /// Atomic write of a text file: a temporary name in the same folder, then rename.
 void write_text_atomically(const std::string& path, const std::string& text) {
   const std::filesystem::path destination(path);
@@ -200,76 +164,79 @@ void write_text_atomically(const std::string& path, const std::string& text) {
 }
 
 int run_replay(const ProbeArguments& a) {
+  if (!a.realtime && a.cpu >= 0)
+    throw std::runtime_error(
+        "--cpu pins the real-time loop, which --no-realtime turns off: drop one of them");
+  if (a.spin_us >= 1e6 / a.rate)
+    throw std::runtime_error(fmt::format(
+        "--spin-us {:g} is not shorter than the period ({:g} us at {:g} Hz): lower it, or the rate",
+        a.spin_us, 1e6 / a.rate, a.rate));
   const meshless::Surrogate s = load(a);
   const std::vector<Sample> samples = read_trace(a.trace);
   const std::string out =
       a.out.empty() ? std::filesystem::path(a.trace).stem().string() + ".probe.csv" : a.out;
-  const auto period =
-      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / a.rate));
   std::cerr << fmt::format("probe: replaying {} samples of {} at {:g} Hz (deadline {:.0f} us each)\n",
                            samples.size(), a.trace, a.rate, 1e6 / a.rate);
 
-  struct Record {
-    meshless::SurrogateResponse r;
-    double release_us = 0.0, latency_us = 0.0, compute_us = 0.0;
-    bool missed = false;
-  };
-  std::vector<Record> records(samples.size());
+  std::vector<meshless::SurrogateResponse> responses(samples.size());
   core::PointMatrix u(s.num_surface_nodes(), 3);  // allocated once, outside the loop
-  std::string scheduling;
-  {
-    const RealtimeScheduling realtime(a.realtime);
-    scheduling = realtime.describe(a.realtime);
-    const Clock::time_point start = Clock::now() + std::chrono::milliseconds(20);
-    for (std::size_t i = 0; i < samples.size(); ++i) {
-      const Clock::time_point release = start + static_cast<Clock::rep>(i) * period;
-      // Sleep to just before the release, then spin: the OS wakes sleepers tens of microseconds late.
-      std::this_thread::sleep_until(release - std::chrono::microseconds(200));
-      while (Clock::now() < release) {
-      }
-      const Clock::time_point begin = Clock::now();
-      Record& rec = records[i];
-      rec.r = s.query(samples[i].x * 1e-3, samples[i].f, &u);
-      const Clock::time_point done = Clock::now();
-      rec.release_us = std::chrono::duration<double, std::micro>(release - start).count();
-      rec.latency_us = std::chrono::duration<double, std::micro>(done - release).count();
-      rec.compute_us = std::chrono::duration<double, std::micro>(done - begin).count();
-      rec.missed = done > release + period;  // the deadline is the next sample's release
-    }
-  }
+  FixedRateLoopOptions options;
+  options.rate_hz = a.rate;
+  options.spin_ns = static_cast<MonotonicNs>(std::llround(a.spin_us * 1e3));
+  options.scheduling.realtime = a.realtime;
+  options.scheduling.cpu = a.cpu;
+  LoopScheduling scheduling;
+  const std::vector<LoopSample> timing = run_fixed_rate_loop(
+      samples.size(), options,
+      [&](std::size_t i) { responses[i] = s.query(samples[i].x * 1e-3, samples[i].f, &u); },
+      // Before the first release, on the loop's thread: say what was refused (once, now rather than after the
+      // replay), then an untimed query puts its code and the surrogate's data in the loop core's caches.
+      [&] {
+        for (const std::string& refusal : scheduling.refusals) std::cerr << "probe: " << refusal << "\n";
+        s.query(samples.front().x * 1e-3, samples.front().f, &u);
+      },
+      &scheduling);
+  const LoopSummary summary = summarize(timing);
+  const DeadlineSchedule schedule(0, a.rate, options.spin_ns);  // the offsets from the start, for the CSV
 
-  std::vector<double> latency, compute;
-  int missed = 0, clamped = 0, off_contact = 0;
+  int clamped = 0, off_contact = 0;
   std::string csv =
       "sample,t_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,release_us,latency_us,compute_us,missed_deadline,contact_"
       "node,"
       "contact_distance_mm,on_trained_contact,force_in_range,ux_mm,uy_mm,uz_mm,max_surface_mm,max_surface_"
-      "node\n";
+      "node,woke_late_us\n";
   for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Record& r = records[i];
-    latency.push_back(r.latency_us);
-    compute.push_back(r.compute_us);
-    missed += r.missed;
-    clamped += !r.r.force_in_range;
-    off_contact += !r.r.on_trained_contact;
+    const meshless::SurrogateResponse& r = responses[i];
+    const LoopSample& t = timing[i];
+    clamped += !r.force_in_range;
+    off_contact += !r.on_trained_contact;
     const Sample& p = samples[i];
     csv += fmt::format(
         "{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{},{},"
-        "{:.6g},{:.6g},{:.6g},{:.6g},{}\n",
-        i, p.t, p.x.x(), p.x.y(), p.x.z(), p.f.x(), p.f.y(), p.f.z(), r.release_us, r.latency_us,
-        r.compute_us, r.missed ? 1 : 0, s.data().surface_vertex[r.r.contact_node], r.r.contact_distance * 1e3,
-        r.r.on_trained_contact ? 1 : 0, r.r.force_in_range ? 1 : 0, r.r.contact_displacement.x() * 1e3,
-        r.r.contact_displacement.y() * 1e3, r.r.contact_displacement.z() * 1e3,
-        r.r.max_surface_displacement * 1e3, s.data().surface_vertex[r.r.max_surface_node]);
+        "{:.6g},{:.6g},{:.6g},{:.6g},{},{:.3f}\n",
+        i, p.t, p.x.x(), p.x.y(), p.x.z(), p.f.x(), p.f.y(), p.f.z(),
+        1e-3 * static_cast<double>(schedule.release(static_cast<std::int64_t>(i))), 1e-3 * t.latency_ns,
+        1e-3 * t.compute_ns, t.missed ? 1 : 0, s.data().surface_vertex[r.contact_node],
+        r.contact_distance * 1e3, r.on_trained_contact ? 1 : 0, r.force_in_range ? 1 : 0,
+        r.contact_displacement.x() * 1e3, r.contact_displacement.y() * 1e3, r.contact_displacement.z() * 1e3,
+        r.max_surface_displacement * 1e3, s.data().surface_vertex[r.max_surface_node], 1e-3 * t.woke_late_ns);
   }
   write_text_atomically(out, csv);
+  const LoopSummary& m = summary;
   std::cout << fmt::format(
-      "replayed {} samples at {:g} Hz on '{}' ({} surface nodes, {}): latency p50 {:.1f} us, p99 {:.1f} us, "
-      "max "
-      "{:.1f} us (query alone p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us); missed deadlines: {} of {}\n",
-      samples.size(), a.rate, s.data().case_name, s.num_surface_nodes(), scheduling, percentile(latency, 50),
-      percentile(latency, 99), *std::max_element(latency.begin(), latency.end()), percentile(compute, 50),
-      percentile(compute, 99), *std::max_element(compute.begin(), compute.end()), missed, samples.size());
+      "replayed {} samples at {:g} Hz on '{}' ({} surface nodes): latency p50 {:.1f} us, p99 {:.1f} us, max "
+      "{:.1f} us (query alone p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us); missed deadlines: {} of {} "
+      "({:.2f} %; missed = answered after its period's end, the next release)\n",
+      samples.size(), a.rate, s.data().case_name, s.num_surface_nodes(), m.latency_p50_us, m.latency_p99_us,
+      m.latency_max_us, m.compute_p50_us, m.compute_p99_us, m.compute_max_us, m.missed, m.samples,
+      m.missed_percent);
+  std::cout << fmt::format(
+      "scheduling: {}; each sleep (clock_nanosleep to an absolute time) ends {:g} us before the release, "
+      "then spins: it ended late by p50 {:.1f} us, p99 {:.1f} us, max {:.1f} us\n",
+      a.realtime ? scheduling.describe()
+                 : "normal scheduler (--no-realtime): SCHED_OTHER, not pinned, memory not locked",
+      a.spin_us, m.woke_late_p50_us, m.woke_late_p99_us, m.woke_late_max_us);
+  for (const std::string& refusal : scheduling.refusals) std::cout << "refused: " << refusal << "\n";
   if (clamped || off_contact)
     std::cout << fmt::format(
         "flagged: {} sample(s) with a force outside +-{:g} N (clamped), {} away from every trained "
@@ -305,8 +272,21 @@ void add_probe_commands(CLI::App& app) {
                    "training patch radius)")
       ->check(CLI::NonNegativeNumber);
   probe->add_flag(
-      "--realtime", args.realtime,
-      "Run the replay loop under SCHED_FIFO (priority 50), as a haptic thread would; reported when refused");
+      "--realtime,!--no-realtime", args.realtime,
+      "The replay loop's thread as a haptic thread runs (the default): pinned to one CPU (--cpu, else the "
+      "last one allowed), SCHED_FIFO priority 50, memory locked (mlockall); each refusal is reported and the "
+      "loop goes on without it. --no-realtime: the normal scheduler, no pin, no lock, to compare with");
+  probe
+      ->add_option("--spin-us", args.spin_us,
+                   "The replay's sleep ends this long [us] before each release and spins to it, absorbing "
+                   "the kernel's wake-up delay (docs/SURROGATE.md §7)")
+      ->check(CLI::Range(0.0, 1e5))
+      ->capture_default_str();
+  probe
+      ->add_option("--cpu", args.cpu,
+                   "Pin the replay loop to this CPU (default: the last one the process may use); refused "
+                   "unless the process's affinity allows it")
+      ->check(CLI::NonNegativeNumber);
   probe->callback([] { throw CommandResult{args.trace.empty() ? run_interactive(args) : run_replay(args)}; });
 }
 
