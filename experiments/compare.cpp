@@ -58,6 +58,8 @@ bool CompareOptions::IsValid(std::string* why) const {
     if (why) *why = m;
     return false;
   };
+  if (reference_samples != "solved" && reference_samples != "extrapolated")
+    return fail("--reference must be \"solved\" or \"extrapolated\", got \"" + reference_samples + "\"");
   if (out_dir.empty()) return fail("--out is required");
   if (patch_edge_distance && !(*patch_edge_distance >= 0.0)) return fail("--edge-distance must be >= 0 mm");
   if (cut_distance && !(*cut_distance >= 0.0)) return fail("--cut-distance must be >= 0 mm");
@@ -70,6 +72,34 @@ const std::vector<MeshlessVariant>& meshless_variants() {
       {"visibility", "the baseline: the visibility criterion across the cut"}};
   return variants;
 }
+
+namespace {
+
+json cut_effect_summary(const Comparison& c) {
+  auto uncut_of = [&](const std::string& name) -> const Eigen::MatrixXd& {
+    for (const auto& [model, u] : c.uncut_samples)
+      if (model == name) return u;
+    throw std::logic_error("compare: no uncut solve of " + name);
+  };
+  // The FEM's effect from its solved samples: an extrapolated reference has no uncut counterpart.
+  const Eigen::MatrixXd fem_cut = c.solved_reference_samples.value_or(c.reference.sample_displacements);
+  const Eigen::MatrixXd fem_effect = fem_cut - uncut_of("fem");
+  const double peak = peak_magnitude(fem_effect);
+  json models = json::object();
+  for (const auto& [name, r] : c.models) {
+    const Eigen::MatrixXd effect = r.sample_displacements - uncut_of(name);
+    const double error = rmse(effect, fem_effect);
+    models[name] = {{"rmse_mm", error * 1e3},
+                    {"rmse_relative_to_fem_peak", peak > 0 ? json(error / peak) : json(nullptr)},
+                    {"peak_effect_mm", peak_magnitude(effect) * 1e3}};
+  }
+  return {{"definition", "each model's cut solve minus its own uncut solve at the samples; RMSE (eq. 34) of that "
+                         "effect against the FEM's, relative to the peak of the FEM's effect"},
+          {"fem_peak_effect_mm", peak * 1e3},
+          {"models", models}};
+}
+
+}  // namespace
 
 json comparison_summary(const Comparison& c) {
   const Eigen::MatrixXd& u_ref = c.reference.sample_displacements;
@@ -110,11 +140,16 @@ json comparison_summary(const Comparison& c) {
       {"geometry_seconds", c.geometry_seconds},
       {"reference",
        {{"model", "fem"},
+        {"samples", c.solved_reference_samples ? "extrapolated" : "solved"},
+        {"solved_minus_extrapolated_rms_mm", c.solved_reference_samples
+                                                 ? json(rmse(*c.solved_reference_samples, u_ref) * 1e3)
+                                                 : json(nullptr)},
         {"peak_sample_displacement_mm", peak * 1e3},
         {"error_bar", c.error_bar.to_json()},
         {"timings", phase_seconds(c.reference)},
         {"details", c.reference.details}}},
       {"models", models}};
+  if (!c.uncut_samples.empty()) summary["cut_effect"] = cut_effect_summary(c);
   if (c.models.size() == 2) {
     const auto& a = c.models[0].second.sample_displacements;
     const auto& b = c.models[1].second.sample_displacements;
@@ -158,10 +193,15 @@ std::string comparison_samples_csv(const Comparison& c) {
 }
 
 std::string comparison_table_md(const Comparison& c, const json& s) {
-  std::string md = fmt::format("# Comparison: {}\n\nProduced by `tissue compare {}`. Reference: the FEM model "
-                               "(docs/FEM_REFERENCE.md). RMSE of eq. 34 over the {} samples; the peak reference "
-                               "sample displacement is {:.4f} mm.\n\n",
-                               c.case_name, c.config, s["n_samples"].get<int>(),
+  const std::string reference =
+      c.solved_reference_samples
+          ? fmt::format("the FEM model's samples extrapolated by its mesh study (docs/EXPERIMENTS.md, \"The "
+                        "extrapolated reference\"); this run's solved FEM samples differ from them by {:.4f} mm RMS",
+                        s["reference"]["solved_minus_extrapolated_rms_mm"].get<double>())
+          : std::string("the FEM model as solved here (docs/FEM_REFERENCE.md)");
+  std::string md = fmt::format("# Comparison: {}\n\nProduced by `tissue compare {}`. Reference: {}. RMSE of eq. 34 "
+                               "over the {} samples; the peak reference sample displacement is {:.4f} mm.\n\n",
+                               c.case_name, c.config, reference, s["n_samples"].get<int>(),
                                s["reference"]["peak_sample_displacement_mm"].get<double>());
   const json& bar = s["reference"]["error_bar"];
   const std::string bar_text = bar["known"].get<bool>()
@@ -181,6 +221,15 @@ std::string comparison_table_md(const Comparison& c, const json& s) {
   if (s.contains("difference_mm"))
     md += fmt::format("\nDifference ({}): **{:.4f} mm**.\n", s["difference_definition"].get<std::string>(),
                       s["difference_mm"].get<double>());
+  if (s.contains("cut_effect")) {
+    const json& e = s["cut_effect"];
+    md += fmt::format("\n**The cut's own effect** ({}); the FEM's peak effect is {:.4f} mm:\n\n"
+                      "| model | cut-effect RMSE [mm] | / FEM peak effect | peak effect [mm] |\n|---|---|---|---|\n",
+                      e["definition"].get<std::string>(), e["fem_peak_effect_mm"].get<double>());
+    for (const auto& [name, m] : e["models"].items())
+      md += fmt::format("| {} | {} | {} | {} |\n", name, fixed(m["rmse_mm"], 4), percent(m["rmse_relative_to_fem_peak"]),
+                        fixed(m["peak_effect_mm"], 4));
+  }
   for (const auto& [name, m] : s["models"].items())
     if (m["details"].contains("solved_as_why"))
       md += fmt::format("\n{}: {}.\n", name, m["details"]["solved_as_why"].get<std::string>());
@@ -292,6 +341,53 @@ ReferenceErrorBar lookup_error_bar(const std::string& file, const core::Case& c,
   return reference_error_bar(study, file, c.name, c.geometry.mesh_size, fem_samples);
 }
 
+/// Each model's own uncut solve, for the cut effect: the FEM on the uncut body's mesh (the same samples, which come
+/// from the exact surface), and the meshless model once on the same node cloud with no cut (without a cut its two
+/// variants are one model).
+void solve_uncut(const core::Case& c, const core::Geometry& g, Progress* progress, Comparison* cmp) {
+  core::Case uncut = c;
+  uncut.cut.reset();
+  progress->step("cut effect: the uncut body's FEM mesh (Gmsh)");
+  const core::Geometry g_uncut = core::build_geometry(uncut);
+  if (g_uncut.sample_points.rows() != g.sample_points.rows() ||
+      (g_uncut.sample_points - g.sample_points).cwiseAbs().maxCoeff() > 1e-9)
+    throw std::runtime_error("compare: the uncut body's samples differ from the cut body's; the cut effect cannot be "
+                             "taken at the same points (run with --no-cut-effect)");
+  const int steps = c.time.steps;
+  reference_fem::FemRunOptions fem_options;
+  fem_options.on_step = [&](const reference_fem::StepReport& s) {
+    progress->step(fmt::format("cut effect: uncut FEM step {}/{}", s.step, steps));
+  };
+  cmp->uncut_samples.emplace_back("fem", reference_fem::run_case(uncut, g_uncut, fem_options).sample_displacements);
+  core::Geometry same_cloud = g;  // the cut body's node cloud, without its cut
+  same_cloud.cut.reset();
+  const ModelResult meshless = solve_meshless(uncut, same_cloud, std::string(), [&](const std::string& line) {
+    progress->step("cut effect: uncut meshless: " + line);
+  });
+  for (const auto& v : meshless_variants()) cmp->uncut_samples.emplace_back(v.name, meshless.sample_displacements);
+}
+
+/// Replace the solved FEM samples by the study's extrapolated ones, with their bar; refuses, saying why, when the
+/// study cannot give them for exactly this reference.
+void use_extrapolated_reference(const std::string& file, Comparison* cmp) {
+  ReferenceErrorBar& bar = cmp->error_bar;
+  if (!bar.known || !bar.extrapolated_samples)
+    throw std::runtime_error(fmt::format(
+        "--reference extrapolated needs a mesh study of exactly this reference with extrapolated samples in {}: {}; "
+        "run `tissue verify fem --config {}` (its sizes ending at or below this case's mesh size) and pass its "
+        "fem.json with --reference-error, or compare with the solved reference",
+        file, bar.known ? "the study holds no extrapolated samples (written by verify fem since the elastic support)"
+                        : bar.why_unknown,
+        cmp->config));
+  cmp->solved_reference_samples = cmp->reference.sample_displacements;
+  cmp->reference.sample_displacements = *bar.extrapolated_samples;
+  cmp->reference.model = "fem (extrapolated)";
+  const Eigen::MatrixXd& x = *bar.extrapolated_samples;
+  bar.relative = bar.extrapolated_relative;
+  bar.rms_mm = bar.relative * x.norm() * 1e3 / std::sqrt(static_cast<double>(x.rows()));
+  bar.method = bar.extrapolated_method;
+}
+
 void write_plot(const core::OutputDirectory& out, const std::string& case_name, json* summary) {
   const std::string script = std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_radar.py";
   const std::string log = out.file("plot.log").string();
@@ -322,10 +418,15 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("compare: " + why);
   const core::Case c = core::load_case(config);
+  if (options.reference_samples == "extrapolated" && !std::filesystem::exists(options.reference_error_file))
+    throw std::runtime_error(fmt::format("--reference extrapolated needs the mesh study given by --reference-error, "
+                                         "but {} does not exist; run `tissue verify fem --config {}` first",
+                                         options.reference_error_file, config));
   const int steps = c.time.steps;
   // Without a cut the two meshless variants are one model (no weight is modified), so it is solved once.
   const int meshless_solves = c.cut ? static_cast<int>(meshless_variants().size()) : 1;
-  Progress progress("compare " + c.name, 1 + (1 + meshless_solves) * (1 + steps) + 2);
+  const int uncut_steps = c.cut && options.cut_effect ? 1 + 2 * (1 + steps) : 0;  // solve_uncut's progress lines
+  Progress progress("compare " + c.name, 1 + (1 + meshless_solves) * (1 + steps) + uncut_steps + 2);
   core::OutputDirectory out(options.out_dir);  // staged: nothing is left behind if anything below fails
 
   progress.step("building the geometry, the FEM mesh and the node cloud (Gmsh)");
@@ -374,12 +475,15 @@ int run_compare(const std::string& config, const CompareOptions& options) {
     cmp.models.emplace_back(variant.name, std::move(r));
   }
 
+  if (cmp.has_cut && options.cut_effect) solve_uncut(c, g, &progress, &cmp);
+
   progress.step("comparing at the samples and writing the results");
   cmp.rules.patch_edge_distance =
       options.patch_edge_distance.value_or(core::kPatchEdgeBandPerLoadRadius * c.load.radius);
   cmp.rules.cut_distance = options.cut_distance.value_or(c.meshless.node_spacing);
   cmp.diagnostics = diagnose_samples(g.sample_points, g.load_centre, c.load.radius, g.cut, cmp.rules);
   cmp.error_bar = lookup_error_bar(options.reference_error_file, c, cmp.reference.sample_displacements);
+  if (options.reference_samples == "extrapolated") use_extrapolated_reference(options.reference_error_file, &cmp);
   json summary = comparison_summary(cmp);
 
   write_text_file(out.file("case.json").string(), c.document.dump(2) + "\n");

@@ -27,6 +27,12 @@ struct CompareOptions {
   /// means the error bar is unknown.
   std::string reference_error_file = "results/verify/fem.json";
   bool plot = true;  ///< run scripts/plot_radar.py for radar.png
+  /// Cut cases: also solve every model without the cut and report each model's cut effect against the FEM's.
+  bool cut_effect = true;
+  /// Which samples stand for the reference: "solved" (this run's FEM solve) or "extrapolated" (the
+  /// Richardson-extrapolated samples of the mesh study in reference_error_file, which must have solved exactly this
+  /// reference; their bar is the study's finest level's). The FEM is solved either way, to check the study.
+  std::string reference_samples = "solved";
 
   bool IsValid(std::string* why) const;
 };
@@ -48,6 +54,14 @@ struct Comparison {
   SampleFlagRules rules;
   SampleDiagnostics diagnostics;
   ReferenceErrorBar error_bar;
+  /// With CompareOptions::reference_samples "extrapolated": the FEM's own solved samples (#samples by 3 [m]), which
+  /// `reference` then no longer holds.
+  std::optional<Eigen::MatrixXd> solved_reference_samples;
+  /// Cut cases: each model's own uncut solve at the same samples (#samples by 3 [m]), by model name ("fem" and each
+  /// meshless variant), so that each model's cut effect (its cut solve minus its uncut solve) can be compared with the
+  /// FEM's: the common discretisation error of the meshless model then cancels (docs/EXPERIMENTS.md, "The cut's own
+  /// effect").
+  std::vector<std::pair<std::string, Eigen::MatrixXd>> uncut_samples;
   double geometry_seconds = 0.0;  ///< building the geometry and both meshes, shared by the three models
   bool has_cut = false;
 };

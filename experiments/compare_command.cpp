@@ -25,11 +25,20 @@ void add_compare_command(CLI::App& app) {
                   "`tissue verify fem` result (fem.json) holding a mesh study of this exact reference; the error "
                   "bar is reported as unknown otherwise")
       ->capture_default_str();
+  cmd->add_option("--reference", options.reference_samples,
+                  "Which samples stand for the reference: the FEM as solved here, or the Richardson-extrapolated "
+                  "samples of the --reference-error study (which must have solved exactly this reference)")
+      ->check(CLI::IsMember({"solved", "extrapolated"}))
+      ->capture_default_str();
   cmd->add_flag("--no-plot", no_plot, "Do not run scripts/plot_radar.py (no radar.png)");
+  static bool no_cut_effect = false;
+  cmd->add_flag("--no-cut-effect", no_cut_effect,
+                "Cut cases: do not solve each model without the cut (no cut-effect columns; two solves fewer)");
   cmd->callback([] {
     if (edge_mm >= 0.0) options.patch_edge_distance = edge_mm * 1e-3;
     if (cut_mm >= 0.0) options.cut_distance = cut_mm * 1e-3;
     options.plot = !no_plot;
+    options.cut_effect = !no_cut_effect;
     throw CommandResult{run_compare(config, options)};
   });
 }

@@ -120,6 +120,16 @@ ReferenceErrorBar reference_error_bar(const nlohmann::json& verify_fem, const st
   else
     finest_method = richardson.value("note", std::string("the study's estimate"));
   bar.known = true;
+  if (richardson.contains("extrapolated_sample_displacements_mm")) {
+    nlohmann::json level = {{"sample_displacements_mm", richardson["extrapolated_sample_displacements_mm"]}};
+    if (const std::optional<Eigen::MatrixXd> x = samples_of(level)) {
+      bar.extrapolated_samples = *x * 1e-3;
+      bar.extrapolated_relative = finest_relative * finest_u->norm() / x->norm();
+      bar.extrapolated_method = fmt::format("the samples extrapolated from the study's last two levels ({}); their "
+                                            "bar is the finest level's ({} mm) estimated error",
+                                            finest_method, finest_size);
+    }
+  }
   if (level_h == finest) {
     bar.relative = finest_relative;
     bar.method = finest_method;

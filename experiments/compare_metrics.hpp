@@ -51,6 +51,12 @@ struct ReferenceErrorBar {
   std::string method;        ///< how the study estimated it (Richardson order, or the first-order bound)
   std::string source;        ///< the study file
   std::string why_unknown;   ///< when !known: what is missing
+  /// The study's extrapolated samples (#samples by 3 [m]) when it wrote them, and the error bar they carry: the
+  /// finest level's estimated error, relative to the extrapolated samples' norm (extrapolating does not claim
+  /// more accuracy than the finest level's estimate).
+  std::optional<Eigen::MatrixXd> extrapolated_samples;
+  double extrapolated_relative = 0.0;
+  std::string extrapolated_method;
   nlohmann::json to_json() const;
 };
 

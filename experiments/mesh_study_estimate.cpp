@@ -42,6 +42,7 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
   }
   if (std::abs(p - expected_order) <= kOrderTolerance) {
     const double error = d2 / (std::pow(ratio, p) - 1.0) / finest;
+    e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, p) - 1.0);
     e.json = {{"kind", "richardson"}, {"observed_order", p}, {"expected_order", expected_order},
               {"estimated_error_of_finest_relative", error}, {"observed_orders", orders}};
     e.sentence = fmt::format("Richardson (last three levels): observed order {:.2f} (expected {:.0f}), estimated "
@@ -50,6 +51,7 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
     return e;
   }
   const double error = d2 / (std::pow(ratio, expected_order) - 1.0) / finest;
+  e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, expected_order) - 1.0);
   const std::string why = p > 0 ? fmt::format("observed order {:.2f} {} the expected {:.0f} ± {}", p,
                                               p < expected_order ? "below" : "above", expected_order, kOrderTolerance)
                                 : std::string("differences not decreasing");

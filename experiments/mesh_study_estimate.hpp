@@ -30,6 +30,9 @@ struct MeshStudyEstimate {
   /// fewer than three levels.
   nlohmann::json json;
   std::string sentence;  ///< the same for fem.md
+  /// The samples extrapolated from the last two levels with the order the estimate used,
+  /// u_f + (u_f - u_{f-1}) / (r^p - 1), in the units and shape of `u`; empty when there is no estimate.
+  Eigen::MatrixXd extrapolated;
 };
 
 /// `u[l]`: every sample displacement of level l (any shape, same for all levels), `h_mm[l]` its mesh size,

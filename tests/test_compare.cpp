@@ -98,6 +98,26 @@ json study_json(const Eigen::MatrixXd& finest_mm, bool with_order) {
   return {{"mesh_convergence", {{"lung_small", {{"levels", levels}, {"richardson", richardson}}}}}};
 }
 
+TEST(CompareMetrics, ExtrapolatedSamplesCarryTheFinestLevelsBar) {
+  Eigen::MatrixXd u_mm(2, 3);
+  u_mm << 3, 0, 4, 0, 0, 0;
+  json study = study_json(u_mm, true);
+  study["mesh_convergence"]["lung_small"]["richardson"]["extrapolated_sample_displacements_mm"] =
+      json::array({{3.3, 0.0, 4.4}, {0.0, 0.0, 0.0}});  // ‖x‖ = 5.5 mm
+  const auto bar = experiments::reference_error_bar(study, "fem.json", "lung_small", 0.012, u_mm * 1e-3);
+  ASSERT_TRUE(bar.known) << bar.why_unknown;
+  ASSERT_TRUE(bar.extrapolated_samples.has_value());
+  EXPECT_NEAR((*bar.extrapolated_samples)(0, 0), 3.3e-3, 1e-15);
+  EXPECT_NEAR((*bar.extrapolated_samples)(0, 2), 4.4e-3, 1e-15);
+  // The finest level's estimated error (2 % of 5 mm = 0.1 mm), relative to the extrapolated samples' norm.
+  EXPECT_NEAR(bar.extrapolated_relative, 0.1 / 5.5, 1e-12);
+  EXPECT_NE(bar.extrapolated_method.find("finest level's (12 mm) estimated error"), std::string::npos)
+      << bar.extrapolated_method;
+  // A study without them (written before they were) gives none.
+  EXPECT_FALSE(experiments::reference_error_bar(study_json(u_mm, true), "fem.json", "lung_small", 0.012, u_mm * 1e-3)
+                   .extrapolated_samples.has_value());
+}
+
 TEST(CompareMetrics, ReferenceErrorBarOnlyForTheStudiedSolve) {
   Eigen::MatrixXd u_mm(2, 3);
   u_mm << 3, 0, 4, 0, 0, 0;  // ‖U‖ = 5 mm over n = 2 samples
@@ -239,6 +259,26 @@ TEST(MeshStudyEstimate, FourLevelsReportTheOrderOfEachThree) {
   const MeshStudyEstimate e = estimate_remaining_error(u, {40.5, 27, 18, 12}, 2.0);
   ASSERT_EQ(e.json["observed_orders"].size(), 2u) << e.json.dump();
   for (const auto& p : e.json["observed_orders"]) EXPECT_NEAR(p.get<double>(), 2.0, 1e-9);
+}
+
+TEST(CompareSummary, EachModelsCutEffectAgainstTheFems) {
+  experiments::Comparison c = synthetic_comparison(false);
+  Eigen::MatrixXd fem_effect = Eigen::MatrixXd::Zero(3, 3), enr_effect = fem_effect, vis_effect = fem_effect;
+  fem_effect(0, 0) = 1e-3;  // the FEM's cut opens sample 0 by 1 mm
+  enr_effect(0, 0) = 0.9e-3;
+  vis_effect(0, 0) = 1.5e-3;
+  vis_effect(2, 1) = 0.2e-3;
+  c.uncut_samples = {{"fem", c.reference.sample_displacements - fem_effect},
+                     {"enrichment", c.models[0].second.sample_displacements - enr_effect},
+                     {"visibility", c.models[1].second.sample_displacements - vis_effect}};
+  const json e = experiments::comparison_summary(c)["cut_effect"];
+  EXPECT_NEAR(e["fem_peak_effect_mm"].get<double>(), 1.0, 1e-12);
+  EXPECT_NEAR(e["models"]["enrichment"]["rmse_mm"].get<double>(), std::sqrt(0.01 / 3.0), 1e-12);
+  EXPECT_NEAR(e["models"]["visibility"]["rmse_mm"].get<double>(), std::sqrt((0.25 + 0.04) / 3.0), 1e-12);
+  EXPECT_NEAR(e["models"]["visibility"]["rmse_relative_to_fem_peak"].get<double>(), std::sqrt(0.29 / 3.0), 1e-12);
+  EXPECT_NEAR(e["models"]["visibility"]["peak_effect_mm"].get<double>(), 1.5, 1e-12);
+  // No uncut solves (no cut, or --no-cut-effect): no such entry.
+  EXPECT_FALSE(experiments::comparison_summary(synthetic_comparison(false)).contains("cut_effect"));
 }
 
 TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {

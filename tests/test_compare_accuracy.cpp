@@ -13,6 +13,10 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
+#include <vector>
+
+#include <Eigen/Core>
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -63,6 +67,29 @@ void check_gate(const std::string& config) {
   int lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
   EXPECT_EQ(lines, 1 + 3 * s["n_samples"].get<int>());
+
+  // The reference itself: its samples against the committed ones, so that the FEM cannot drift toward the meshless
+  // model unseen (the gates above see only their difference).
+  Eigen::MatrixXd fem = Eigen::MatrixXd::Zero(s["n_samples"].get<int>(), 3);
+  std::ifstream rows(out / "samples.csv");
+  std::string line;
+  std::getline(rows, line);  // header: sample,model,x_mm,y_mm,z_mm,ux_mm,uy_mm,uz_mm,...
+  while (std::getline(rows, line)) {
+    std::vector<std::string> cells;
+    std::stringstream cs(line);
+    for (std::string cell; std::getline(cs, cell, ',');) cells.push_back(cell);
+    if (cells.size() > 7 && cells[1] == "fem")
+      for (int k = 0; k < 3; ++k) fem(std::stoi(cells[0]), k) = std::stod(cells[5 + k]);
+  }
+  const json& committed = gate["reference_samples_mm"];
+  ASSERT_EQ(static_cast<Eigen::Index>(committed.size()), fem.rows()) << config;
+  Eigen::MatrixXd expected(fem.rows(), 3);
+  for (Eigen::Index i = 0; i < fem.rows(); ++i)
+    for (int k = 0; k < 3; ++k) expected(i, k) = committed[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+  const double drift = (fem - expected).norm() / expected.norm();
+  std::cout << fmt::format("{} FEM reference: samples differ from the committed ones by {:.2e} (relative; limit {})\n",
+                           config, drift, gate["reference_tolerance_relative"].get<double>());
+  EXPECT_LE(drift, gate["reference_tolerance_relative"].get<double>()) << config;
 
   const json& goal = gate["goal"];
   for (const auto& [model, limits] : gate["models"].items()) {
