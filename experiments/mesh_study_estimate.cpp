@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -50,22 +51,26 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
                              p, expected_order, 100 * error);
     return e;
   }
-  const double error = d2 / (std::pow(ratio, expected_order) - 1.0) / finest;
-  e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, expected_order) - 1.0);
+  // Outside the asymptotic range, never the order that would shrink the bar: below the expected order, the data's
+  // own (not below kLowestOrder); above it, the expected one.
+  const double assumed = p < expected_order ? std::max(p, kLowestOrder) : expected_order;
+  const double error = d2 / (std::pow(ratio, assumed) - 1.0) / finest;
+  e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, assumed) - 1.0);
   const std::string why = p > 0 ? fmt::format("observed order {:.2f} {} the expected {:.0f} ± {}", p,
                                               p < expected_order ? "below" : "above", expected_order, kOrderTolerance)
                                 : std::string("differences not decreasing");
   e.json = {{"kind", "assumed_order"},
-            {"note", why + ": not in the asymptotic range; the estimate assumes the expected order and is not a bound"},
-            {"assumed_order", expected_order},
+            {"note", why + ": not in the asymptotic range; the estimate assumes the smaller of the two orders (at least "
+                           "1) and is not a bound"},
+            {"assumed_order", assumed},
             {"expected_order", expected_order},
             {"estimated_error_of_finest_relative", error},
             {"observed_orders", orders}};
   if (p > 0) e.json["observed_order_not_used"] = p;
-  e.sentence = fmt::format("Richardson: {} (not in the asymptotic range). Assuming order {:.0f}, the remaining error "
+  e.sentence = fmt::format("Richardson: {} (not in the asymptotic range). Assuming order {:.2f}, the remaining error "
                            "of the finest level is about {:.2f} % of the sample displacements; this is an estimate, "
                            "not a bound.",
-                           why, expected_order, 100 * error);
+                           why, assumed, 100 * error);
   return e;
 }
 

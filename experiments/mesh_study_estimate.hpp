@@ -12,6 +12,9 @@ namespace experiments {
 
 /// How far an observed order may sit from the expected one and still count as asymptotic.
 constexpr double kOrderTolerance = 0.3;
+/// The lowest order the samples converge at here (a clamp's edge or a crack's front): an estimate outside the
+/// asymptotic range never assumes less, since order 0.2 would give 28 % from a 1 % change.
+constexpr double kLowestOrder = 1.0;
 
 /// The order at which a case's sample displacements converge under the study's refinement, set by the roughest
 /// line of the solution (docs/FEM_REFERENCE.md, "The order the samples converge at"): the samples lie away from
@@ -24,8 +27,8 @@ double expected_sample_order(const core::Case& c);
 struct MeshStudyEstimate {
   /// Always (with three levels or more and the last two different): expected_order, estimated_error_of_finest_relative,
   /// kind ("richardson" or "assumed_order"), observed_orders (one per consecutive three levels). Richardson
-  /// (observed order within kOrderTolerance of the expected one): observed_order. Otherwise: assumed_order (= the
-  /// expected order), observed_order_not_used when one was found, and a note saying that the figure is an estimate
+  /// (observed order within kOrderTolerance of the expected one): observed_order. Otherwise: assumed_order (see
+  /// estimate_remaining_error), observed_order_not_used when one was found, and a note saying that the figure is an estimate
   /// outside the asymptotic range, not a bound. {note} alone when the last two levels agree exactly; empty with
   /// fewer than three levels.
   nlohmann::json json;
@@ -37,9 +40,11 @@ struct MeshStudyEstimate {
 
 /// `u[l]`: every sample displacement of level l (any shape, same for all levels), `h_mm[l]` its mesh size,
 /// coarse to fine. The error is relative to the finest level's norm. An observed order within kOrderTolerance of
-/// `expected_order` is extrapolated with. Any other is not: an order below the expected one means a coarse level is
-/// not yet asymptotic (extrapolating with order 0.2 would give 28 %), and one above it would shrink the bar on
-/// the strength of a coincidence; the estimate then assumes the expected order and says so.
+/// `expected_order` is extrapolated with. Any other is not in the asymptotic range, and the estimate assumes the
+/// order that gives the larger bar: below the expected order the observed one (not less than kLowestOrder: a coarse
+/// level not yet asymptotic, or samples within an element of a singular line, which converge at about order 1
+/// before the mesh resolves them), above it the expected one (a larger order would shrink the bar on the strength
+/// of a coincidence). It says so, and that the figure is an estimate, not a bound.
 MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
                                            double expected_order);
 

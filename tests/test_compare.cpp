@@ -240,6 +240,14 @@ TEST(MeshStudyEstimate, AnOrderFarFromTheExpectedOneIsReportedAndNotExtrapolated
   EXPECT_NE(f.sentence.find("above the expected 1"), std::string::npos) << f.sentence;
   EXPECT_NEAR(f.json["estimated_error_of_finest_relative"].get<double>(),
               (fast[2] - fast[1]).norm() / fast[2].norm() / 0.5, 1e-12);
+  // Order 1 where 2 is expected (samples within an element of the load patch's edge): the observed order, which
+  // gives the larger bar (d2 / 0.5 instead of d2 / 1.25).
+  const std::vector<Eigen::MatrixXd> first = converging_levels(1.0);
+  const MeshStudyEstimate o = estimate_remaining_error(first, {27, 18, 12}, 2.0);
+  EXPECT_EQ(o.json["kind"], "assumed_order");
+  EXPECT_NEAR(o.json["assumed_order"].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(o.json["estimated_error_of_finest_relative"].get<double>(),
+              (first[2] - first[1]).norm() / first[2].norm() / 0.5, 1e-9);
   // Differences that grow: the same estimate, no order.
   std::vector<Eigen::MatrixXd> growing = {slow[0], slow[0] + 0.01 * slow[0], slow[0] + 0.05 * slow[0]};
   const MeshStudyEstimate g = estimate_remaining_error(growing, {27, 18, 12}, 1.0);
