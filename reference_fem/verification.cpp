@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/timoshenko_cantilever.hpp"
 #include "reference_fem/sample_evaluator.hpp"
 #include "reference_fem/viscoelastic_solver.hpp"
 
@@ -101,20 +102,9 @@ UniaxialResult run_uniaxial(const UniaxialOptions& o, const BoundaryConditions& 
   return result;
 }
 
-/// Timoshenko & Goodier cantilever (plane stress, nu = 0 here), origin at the clamped end, y about the
-/// neutral axis; I = B D^3 / 12 so that the end shear integrates to P over the B x D section.
-struct Timoshenko {
-  double P, E, nu, L, D, I;
-  Eigen::Vector3d displacement(const Eigen::Vector3d& x) const {
-    const double X = x(0), Y = x(1);
-    const double ux = -P * Y / (6 * E * I) * ((6 * L - 3 * X) * X + (2 + nu) * (Y * Y - D * D / 4));
-    const double uy = P / (6 * E * I) * (3 * nu * Y * Y * (L - X) + (4 + 5 * nu) * D * D * X / 4 + (3 * L - X) * X * X);
-    return {ux, uy, 0.0};
-  }
-  Eigen::Vector3d end_traction(const Eigen::Vector3d& x) const {  // sigma . e_x at x = L
-    return {0.0, P / (2 * I) * (D * D / 4 - x(1) * x(1)), 0.0};
-  }
-};
+/// The Timoshenko & Goodier cantilever (nu = 0 here); I = B D^3 / 12 so that the end shear integrates to P over the
+/// B x D section.
+using Timoshenko = core::TimoshenkoCantilever;
 
 class ExactField : public Function<3> {
  public:

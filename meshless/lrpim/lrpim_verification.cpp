@@ -5,6 +5,7 @@
 #include <random>
 
 #include "core/kelvin_law.hpp"
+#include "core/timoshenko_cantilever.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
 #include "meshless/lrpim/lrpim_model.hpp"
 #include "meshless/mls/node_search.hpp"
@@ -143,27 +144,13 @@ LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, d
   p.node_spacing = h;
   p.rpim = rpim;
   p.alpha_q = alpha_q;
-  const double E = p.material.K1, nu = p.material.nu, I = T * D * D * D / 12.0;
-  // Timoshenko & Goodier: clamped at x = 0, shear P at x = L (exact 3-D elasticity for nu = 0).
-  auto exact_u = [=](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    const double X = x.x(), Y = x.y();
-    return Eigen::Vector3d(
-        -P * Y / (6 * E * I) * ((6 * L - 3 * X) * X + (2 + nu) * (Y * Y - D * D / 4)),
-        P / (6 * E * I) * (3 * nu * Y * Y * (L - X) + (4 + 5 * nu) * D * D * X / 4 + (3 * L - X) * X * X), 0.0);
-  };
-  auto exact_strain = [=](const Eigen::Vector3d& x) -> core::Vector6 {
-    const double X = x.x(), Y = x.y();
-    core::Vector6 e = core::Vector6::Zero();
-    e[0] = -P * (L - X) * Y / (E * I);
-    e[1] = -nu * e[0];
-    e[2] = -nu * e[0];
-    e[3] = P * (1 + nu) / (E * I) * (D * D / 4 - Y * Y);
-    return e;
-  };
+  const double E = p.material.K1;
+  // Clamped at x = 0 to the exact displacement, shear P at x = L (exact 3-D elasticity for nu = 0).
+  const core::TimoshenkoCantilever exact{P, E, p.material.nu, L, D, T * D * D * D / 12.0};
+  auto exact_u = [exact](const Eigen::Vector3d& x) { return exact.displacement(x); };
+  auto exact_strain = [exact](const Eigen::Vector3d& x) { return exact.strain(x); };
   p.prescribed_displacement = exact_u;
-  p.traction = [=](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    return Eigen::Vector3d(0.0, P / (2 * I) * (D * D / 4 - x.y() * x.y()), 0.0);  // sigma_xy at x = L
-  };
+  p.traction = [exact](const Eigen::Vector3d& x) { return exact.end_traction(x); };
   const core::KelvinLaw law(p.material);
   const core::Matrix6 C = law.elastic_matrix(E);
   LrpimModel model(std::move(p));
