@@ -2,13 +2,13 @@
 
 #include <fmt/format.h>
 
-#include <fstream>
 #include <iostream>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/geometry_summary.hpp"
+#include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/vtu_writer.hpp"
 
@@ -66,8 +66,8 @@ int run_mesh(const std::string& config, const std::string& out_dir) {
     write_triangle_vtu(out.file("cut_surface.vtu").string(), v, t, {}, {});
   }
   const nlohmann::json summary = summarize_geometry(c, g);
-  std::ofstream(out.file("case.json")) << c.document.dump(2) << "\n";
-  std::ofstream(out.file("geometry.json")) << summary.dump(2) << "\n";
+  write_text_file(out.file("case.json").string(), c.document.dump(2) + "\n");
+  write_text_file(out.file("geometry.json").string(), summary.dump(2) + "\n");
   out.commit();
   progress.done();
   std::cout << format_geometry_summary(summary);

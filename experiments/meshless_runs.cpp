@@ -3,13 +3,13 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <fstream>
 #include <optional>
 #include <iostream>
 
 #include "core/output_directory.hpp"
 #include "core/case.hpp"
 #include "experiments/crack_opening.hpp"
+#include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/vtu_writer.hpp"
 #include "meshless/cut/cut_quadrature.hpp"
@@ -326,8 +326,8 @@ int run_verify_meshless(const std::string& out_dir, bool quick) {
   }
 
   progress.step("writing meshless.json and meshless.md");
-  std::ofstream(out.file("meshless.json")) << j.dump(2) << "\n";
-  std::ofstream(out.file("meshless.md")) << md;
+  write_text_file(out.file("meshless.json").string(), j.dump(2) + "\n");
+  write_text_file(out.file("meshless.md").string(), md);
   out.commit();
   progress.done();
   std::cout << md;

@@ -5,7 +5,6 @@
 
 #include <stdexcept>
 
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -25,9 +24,7 @@ namespace {
 void write_model_files(const core::OutputDirectory& out, const core::Case& c, const ModelResult& r) {
   write_samples_csv(out.file("samples.csv").string(), r);
   write_timings_json(out.file("timings.json").string(), r);
-  std::ofstream config(out.file("case.json"));
-  config << c.document.dump(2) << "\n";
-  if (!config) throw std::runtime_error("could not write " + out.file("case.json").string());
+  write_text_file(out.file("case.json").string(), c.document.dump(2) + "\n");
 }
 
 void print_summary(const ModelResult& r) {

@@ -5,7 +5,6 @@
 #include <fmt/format.h>
 
 #include <cmath>
-#include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -14,6 +13,7 @@
 #include "core/geometry.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/meshless_runs.hpp"
+#include "experiments/model_result.hpp"
 #include "experiments/progress.hpp"
 #include "reference_fem/fem_model.hpp"
 #include "reference_fem/verification.hpp"
@@ -264,8 +264,8 @@ int run_verify_fem(const VerifyFemOptions& opt) {
     }
     j["reference_mesh_size_mm"] = size;
   }
-  std::ofstream(out.file("fem.json")) << j.dump(2) << "\n";
-  std::ofstream(out.file("fem.md")) << md;
+  write_text_file(out.file("fem.json").string(), j.dump(2) + "\n");
+  write_text_file(out.file("fem.md").string(), md);
   out.commit();
   progress.done();
   std::cout << md;
