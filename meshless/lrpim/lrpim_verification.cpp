@@ -10,6 +10,7 @@
 #include "meshless/lrpim/lrpim_model.hpp"
 #include "meshless/mls/node_search.hpp"
 #include "meshless/verification/box_mesh.hpp"
+#include "meshless/verification/linear_patch_field.hpp"
 
 namespace meshless::lrpim {
 
@@ -85,15 +86,12 @@ LrpimPatchReport run_lrpim_patch_test(int cells, double alpha_q, int polar, int 
   p.rule.polar = polar;
   p.rule.azimuthal = azimuthal;
   p.divergence_correction = divergence_correction;
-  const Eigen::Vector3d a0(1e-4, -2e-4, 3e-4);
-  Eigen::Matrix3d g;
-  g << 1e-3, 2e-4, -3e-4,  //
-      -1e-4, -2e-3, 5e-4,  //
-      4e-4, 1e-4, 1.5e-3;
-  const core::Vector6 eps_exact(g(0, 0), g(1, 1), g(2, 2), g(0, 1) + g(1, 0), g(1, 2) + g(2, 1), g(2, 0) + g(0, 2));
-  const core::KelvinLaw law(p.material);
-  const core::Matrix3 sigma = core::voigt_to_stress(law.elastic_matrix(p.material.K1) * eps_exact);
-  p.prescribed_displacement = [a0, g](const Eigen::Vector3d& x) -> Eigen::Vector3d { return a0 + g * x; };
+  const LinearPatchField field;
+  const Eigen::Vector3d a0 = field.a0;
+  const Eigen::Matrix3d g = field.G;
+  const core::Vector6 eps_exact = field.strain();
+  const core::Matrix3 sigma = field.stress(core::KelvinLaw(p.material));
+  p.prescribed_displacement = [field](const Eigen::Vector3d& x) { return field.displacement(x); };
   // Traction faces are the +x, +y, +z planes: n = e_d of the coordinate that sits on edge.
   p.traction = [sigma, edge](const Eigen::Vector3d& x) -> Eigen::Vector3d {
     int d = 0;

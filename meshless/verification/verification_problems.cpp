@@ -7,6 +7,7 @@
 #include "core/kelvin_law.hpp"
 #include "core/timoshenko_cantilever.hpp"
 #include "meshless/verification/box_mesh.hpp"
+#include "meshless/verification/linear_patch_field.hpp"
 #include "meshless/efg/efg_model.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/node_search.hpp"
@@ -86,15 +87,12 @@ PatchTestReport run_patch_test(int quadrature_order, bool variationally_consiste
   const int nf = static_cast<int>(p.mesh.boundary_faces.rows());
   p.penalised_faces.assign(nf, 1);  // penalty u-bar on ALL faces
   p.loaded_faces.assign(nf, 1);
-  const Eigen::Vector3d a0(1e-4, -2e-4, 3e-4);
-  Eigen::Matrix3d g;
-  g << 1e-3, 2e-4, -3e-4,  //
-      -1e-4, -2e-3, 5e-4,  //
-      4e-4, 1e-4, 1.5e-3;
-  const core::Vector6 eps_exact(g(0, 0), g(1, 1), g(2, 2), g(0, 1) + g(1, 0), g(1, 2) + g(2, 1), g(2, 0) + g(0, 2));
-  const core::KelvinLaw law(p.material);
-  const core::Matrix3 sigma = core::voigt_to_stress(law.elastic_matrix(p.material.K1) * eps_exact);
-  p.prescribed_displacement = [a0, g](const Eigen::Vector3d& x) -> Eigen::Vector3d { return a0 + g * x; };
+  const LinearPatchField field;
+  const Eigen::Vector3d a0 = field.a0;
+  const Eigen::Matrix3d g = field.G;
+  const core::Vector6 eps_exact = field.strain();
+  const core::Matrix3 sigma = field.stress(core::KelvinLaw(p.material));
+  p.prescribed_displacement = [field](const Eigen::Vector3d& x) { return field.displacement(x); };
   // The exact field also carries the traction sigma n on the boundary: without it the (inconsistent) penalty
   // method would be off by O(sigma / alpha) however accurate the integration.
   // The face normal of a box face is one of +-e_d: recover it from the point (faces are on the box planes).
