@@ -181,6 +181,19 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
     s.contact_points = r->vector3_list("contact_points", 1);
     for (auto& p : s.contact_points) p *= kMm;
   }
+  if (auto region = r->optional_object("contact_region")) {
+    if (r->has("contact_points"))
+      r->fail("contact_region", "either contact_points or a contact_region, not both (the region chooses its own "
+                                "training contacts)");
+    ContactRegionSpec g;
+    g.centre = region->vector3("centre") * kMm;
+    g.radius = region->positive("radius") * kMm;
+    g.training_contacts = region->integer("training_contacts", 3, 64, g.training_contacts);
+    g.holdout_contacts = region->integer("holdout_contacts", 0, 64, g.holdout_contacts);
+    region->finish();
+    s.contact_points = {g.centre};
+    s.contact_region = g;
+  }
   s.patch_radius = r->positive("patch_radius", load.radius / kMm) * kMm;
   s.max_force = r->in_range("max_force", 0.0, 1e4, false, true, s.max_force);
   s.force_levels = r->integer("force_levels", 2, 50, s.force_levels);

@@ -141,13 +141,23 @@ struct OutputSpec {
 
 /// The force -> displacement surrogate of paper §3 (eqs. 25-28) that `tissue fit` trains on the meshless node
 /// cloud (docs/SURROGATE.md). Every default lives here; read_surrogate() fills the ones that depend on the case.
+/// A patch of the surface a haptic probe may touch, covered by trained contacts (docs/SURROGATE.md §4).
+struct ContactRegionSpec {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();  ///< [m] snapped to the nearest surface node
+  double radius = 0.0;        ///< [m] surface nodes within this (straight-line) distance of the centre node
+  int training_contacts = 7;  ///< trained contact nodes, spread by farthest-point sampling (>= 3)
+  int holdout_contacts = 4;   ///< untrained region nodes solved in full to measure the interpolation
+};
+
 struct SurrogateSpec {
   enum class ResponseTime {
     end_of_ramp,  ///< the first step at which the ramped force is complete (t >= load.ramp_time)
     end,          ///< the last step (time.total): the crept response under the held force
   };
   /// Contact points [m], each snapped to the nearest surface node of the node cloud; absent -> the load point.
+  /// With a contact_region, the region's training contacts instead.
   std::vector<Eigen::Vector3d> contact_points;
+  std::optional<ContactRegionSpec> contact_region;  ///< a region instead of points (exclusive with them)
   double patch_radius = 0.0;  ///< [m] traction patch around a contact node; absent -> load.radius
   /// [N] every force component is trained over [-max_force, max_force]: forces up to the paper's 4 N in magnitude.
   double max_force = 4.0;

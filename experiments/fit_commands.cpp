@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -46,8 +47,13 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
   for (std::size_t c = 0; c < d.contacts.size(); ++c) {
     const meshless::ContactFit& f = d.contacts[c];
     const Eigen::Vector3d x = f.frame.origin * 1e3;
-    std::cout << fmt::format("contact {} at ({:.2f}, {:.2f}, {:.2f}) mm (snapped {:.2f} mm):\n", c + 1, x.x(),
-                             x.y(), x.z(), r.snap_distance[c] * 1e3);
+    const std::string snapped =
+        d.region ? (c == 0 ? fmt::format("the region's centre node, {:.2f} mm from its configured centre",
+                                         r.snap_distance[0] * 1e3)
+                           : std::string("a region node"))
+                 : fmt::format("snapped {:.2f} mm", r.snap_distance[c] * 1e3);
+    std::cout << fmt::format("contact {} at ({:.2f}, {:.2f}, {:.2f}) mm ({}):\n", c + 1, x.x(), x.y(), x.z(),
+                             snapped);
     std::cout << "  axis  lambda (CV eqs. 25-27 [mm])  field lambda (CV [mm])  (a,b,c) CV eq. 28 [mm] for "
                  "u_x | u_y | u_z"
                  "  training RMS eq. 28 [mm]\n";
@@ -76,13 +82,23 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
       "linear least squares (scaled columns, pivoted QR): {} fits ({}); {} of their {} basis columns dropped "
       "as dependent\n",
       fits, counts, dropped_columns, columns);
-  for (const meshless::HoldoutError& e : r.holdouts)
+  double worst_untrained = -1.0;
+  for (const meshless::HoldoutError& e : r.holdouts) {
+    const Eigen::Vector3d x = d.surface_position.row(e.load.contact).transpose() * 1e3;
     std::cout << fmt::format(
-        "held-out force ({:.4g}, {:.4g}, {:.4g}) N: RMSE over the surface {:.4g} mm = {:.2f} % of the "
-        "contact-node "
-        "displacement ({:.4g} mm), {:.2f} % of the trained peak; contact-node error {:.4g} mm\n",
-        e.load.force.x(), e.load.force.y(), e.load.force.z(), e.rmse * 1e3, 100 * e.relative,
-        e.contact_displacement * 1e3, 100 * e.rmse / r.peak_contact_displacement, e.contact_error * 1e3);
+        "held-out force ({:.4g}, {:.4g}, {:.4g}) N at {} node ({:.2f}, {:.2f}, {:.2f}) mm: RMSE over the surface "
+        "{:.4g} mm = {:.2f} % of the contact-node displacement ({:.4g} mm), {:.2f} % of the trained peak; "
+        "contact-node error {:.4g} mm\n",
+        e.load.force.x(), e.load.force.y(), e.load.force.z(), e.trained_contact ? "trained" : "UNTRAINED region",
+        x.x(), x.y(), x.z(), e.rmse * 1e3, 100 * e.relative, e.contact_displacement * 1e3,
+        100 * e.rmse / r.peak_contact_displacement, e.contact_error * 1e3);
+    if (!e.trained_contact) worst_untrained = std::max(worst_untrained, e.relative);
+  }
+  if (worst_untrained >= 0.0)
+    std::cout << fmt::format(
+        "contact region: largest held-out RMSE at an untrained node {:.2f} % of its contact-node displacement, "
+        "for {} training solves\n",
+        100 * worst_untrained, r.training_solves);
 }
 
 int run_fit(const FitArguments& a) {
@@ -92,8 +108,12 @@ int run_fit(const FitArguments& a) {
     std::cerr << "note: " << a.config
               << ": the surrogate is trained on the body cut by the whole of /cut (the incision is not advanced "
                  "in steps)\n";
-  const int solves = 3 * static_cast<int>(spec.contact_points.size()) * 2 * spec.force_levels;
-  Progress progress("fit", 3 + solves + static_cast<int>(spec.contact_points.size()) + spec.holdout_forces);
+  const int contacts = spec.contact_region ? spec.contact_region->training_contacts
+                                           : static_cast<int>(spec.contact_points.size());
+  const int holdouts =
+      spec.holdout_forces * (1 + (spec.contact_region ? spec.contact_region->holdout_contacts : 0));
+  const int solves = 3 * contacts * 2 * spec.force_levels;
+  Progress progress("fit", 3 + solves + contacts + holdouts + (spec.contact_region ? 1 : 0));
   progress.step("building geometry and the node cloud (Gmsh)");
   const core::Geometry g = node_cloud(c);
   meshless::SurrogateBuildOptions options;

@@ -65,7 +65,12 @@ std::string flags(const meshless::Surrogate& s, const meshless::SurrogateRespons
     out += fmt::format(
         " [force outside the trained range +-{:g} N per component: clamped to ({:.4g}, {:.4g}, {:.4g}) N]",
         s.data().max_force, r.force.x(), r.force.y(), r.force.z());
-  if (!r.on_trained_contact)
+  if (!r.on_trained_contact && s.data().region)
+    out += fmt::format(
+        " [point outside the trained contact region ({:.2f} mm around its centre): the nearest trained contact "
+        "node's response is used, {:.2f} mm away]",
+        s.data().region->radius * 1e3, r.contact_distance * 1e3);
+  else if (!r.on_trained_contact)
     out += fmt::format(
         " [point {:.2f} mm from the nearest trained contact node, beyond {:.2f} mm: its response is used]",
         r.contact_distance * 1e3, s.contact_tolerance() * 1e3);
@@ -203,7 +208,7 @@ int run_replay(const ProbeArguments& a) {
   std::string csv =
       "sample,t_s,x_mm,y_mm,z_mm,fx_N,fy_N,fz_N,release_us,latency_us,compute_us,missed_deadline,contact_"
       "node,"
-      "contact_distance_mm,on_trained_contact,force_in_range,ux_mm,uy_mm,uz_mm,max_surface_mm,max_surface_"
+      "contact_distance_mm,on_trained_contact,in_contact_region,force_in_range,ux_mm,uy_mm,uz_mm,max_surface_mm,max_surface_"
       "node,woke_late_us\n";
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const meshless::SurrogateResponse& r = responses[i];
@@ -212,12 +217,13 @@ int run_replay(const ProbeArguments& a) {
     off_contact += !r.on_trained_contact;
     const Sample& p = samples[i];
     csv += fmt::format(
-        "{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{},{},"
+        "{},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.6g},{:.3f},{:.3f},{:.3f},{},{},{:.4f},{},{},{},"
         "{:.6g},{:.6g},{:.6g},{:.6g},{},{:.3f}\n",
         i, p.t, p.x.x(), p.x.y(), p.x.z(), p.f.x(), p.f.y(), p.f.z(),
         1e-3 * static_cast<double>(schedule.release(static_cast<std::int64_t>(i))), 1e-3 * t.latency_ns,
         1e-3 * t.compute_ns, t.missed ? 1 : 0, s.data().surface_vertex[r.contact_node],
-        r.contact_distance * 1e3, r.on_trained_contact ? 1 : 0, r.force_in_range ? 1 : 0,
+        r.contact_distance * 1e3, r.on_trained_contact ? 1 : 0, r.in_contact_region ? 1 : 0,
+        r.force_in_range ? 1 : 0,
         r.contact_displacement.x() * 1e3, r.contact_displacement.y() * 1e3, r.contact_displacement.z() * 1e3,
         r.max_surface_displacement * 1e3, s.data().surface_vertex[r.max_surface_node], 1e-3 * t.woke_late_ns);
   }

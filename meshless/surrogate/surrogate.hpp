@@ -8,10 +8,12 @@
 // may run from several threads at once, each with its own output buffer. Units: SI (m, N) in and out.
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/tet_mesh.hpp"
+#include "meshless/surrogate/contact_region.hpp"
 #include "meshless/surrogate/surrogate_fit.hpp"
 
 namespace meshless {
@@ -28,15 +30,22 @@ struct SurrogateData {
   std::vector<int> surface_vertex;     ///< #S node ids in the case's meshless node cloud
   core::PointMatrix surface_position;  ///< #S by 3 [m]
   std::vector<ContactFit> contacts;    ///< contact indices refer to the surface nodes above
+  /// Set: every contact above is a trained contact of this region, and a query inside it interpolates between
+  /// them (contact_region.hpp); unset: a query takes the nearest trained contact.
+  std::optional<ContactRegion> region;
   nlohmann::json report;  ///< training figures, held-out errors, timings (for people, not queries)
 };
 
 /// The answer to one query (the surface displacements go to the caller's buffer).
 struct SurrogateResponse {
-  int contact = -1;                 ///< trained contact used (index into SurrogateData::contacts)
-  int contact_node = -1;            ///< its surface node (row of the surface buffer)
-  double contact_distance = 0.0;    ///< [m] from the query point to that node
-  bool on_trained_contact = false;  ///< contact_distance <= the surrogate's contact tolerance
+  int contact = -1;  ///< the nearest trained contact (index into SurrogateData::contacts)
+  /// The surface node (row of the surface buffer) of the answer: the trained contact's node, or inside a contact
+  /// region the surface node nearest the query point.
+  int contact_node = -1;
+  double contact_distance = 0.0;    ///< [m] from the query point to contact_node
+  /// Inside a contact region, or within the contact tolerance of a trained contact node: the answer is trained.
+  bool on_trained_contact = false;
+  bool in_contact_region = false;  ///< the region's interpolation answered (false without a region)
   Eigen::Vector3d force =
       Eigen::Vector3d::Zero();  ///< [N] the force evaluated (clamped to the trained range)
   bool force_in_range = true;  ///< false: a component exceeded max_force and was clamped (never extrapolated)
@@ -57,8 +66,10 @@ class Surrogate {
   int num_contacts() const { return static_cast<int>(data_.contacts.size()); }
   double contact_tolerance() const { return tolerance_; }
 
-  /// A contact point between trained nodes uses the NEAREST trained contact node (documented in
-  /// docs/SURROGATE.md §4); a force component outside [-max_force, max_force] is clamped and flagged.
+  /// Inside the contact region (if any) the trained contacts are interpolated and the dent transported to the
+  /// query point (contact_region.hpp); elsewhere the NEAREST trained contact node answers, flagged when farther
+  /// than the contact tolerance (docs/SURROGATE.md §4). A force component outside [-max_force, max_force] is
+  /// clamped and flagged.
   /// @param point contact point [m]
   /// @param force [N]
   /// @param surface #S by 3 buffer, resized only when its size is wrong; receives u at every surface node [m]
@@ -66,10 +77,21 @@ class Surrogate {
                           core::PointMatrix* surface) const;
 
  private:
+  /// The contact region's answer at `point` (inside it), into r and u.
+  void interpolate_in_region(const Eigen::Vector3d& point, SurrogateResponse* r, core::PointMatrix* surface) const;
+
   SurrogateData data_;
   double tolerance_ = 0.0;
   std::vector<Eigen::MatrixXd>
       nodal_;  ///< per contact: 3S by sum_j lambda_j, columns sigma_x^1.., sigma_y^1..
+  // With a contact region (contact_region.hpp):
+  std::optional<ContactInterpolation> interpolation_;
+  std::vector<Eigen::MatrixXd> smooth_;  ///< per contact: nodal_ of the polynomial terms alone
+  /// Per contact: the contact terms' coefficients as monomials of the GLOBAL direction e = (X - p) / rho,
+  /// rows (component i, order m, monomial), columns as nodal_'s; see kDirectionMonomials in surrogate.cpp.
+  std::vector<Eigen::MatrixXd> dent_;
+  int dent_order_ = 0;           ///< largest contact order m over the contacts' fields
+  double contact_length_ = 0.0;  ///< [m] l of the contact terms, common to every contact
 };
 
 }  // namespace meshless

@@ -57,6 +57,13 @@ std::vector<PatchLoad> holdout_loads(const core::SurrogateSpec& spec, const std:
   return loads;
 }
 
+std::vector<PatchLoad> region_holdout_loads(const core::SurrogateSpec& spec, const std::vector<int>& nodes) {
+  std::vector<PatchLoad> loads;
+  for (int node : nodes)
+    for (const PatchLoad& l : holdout_loads(spec, {node})) loads.push_back(l);
+  return loads;
+}
+
 std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::vector<PatchLoad>& loads,
                                          const std::vector<SolvedLoad>& full) {
   if (loads.size() != full.size())
@@ -75,6 +82,8 @@ std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::
     e.contact_displacement = f.row(loads[i].contact).norm();
     e.relative = e.contact_displacement > 0.0 ? e.rmse / e.contact_displacement : 0.0;
     e.contact_error = (r.contact_displacement - f.row(loads[i].contact).transpose()).norm();
+    e.trained_contact = false;
+    for (const ContactFit& c : surrogate.data().contacts) e.trained_contact |= c.contact == loads[i].contact;
     out.push_back(e);
   }
   return out;
@@ -104,9 +113,25 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
   d.surface_vertex = surface.vertex;
   d.surface_position = surface.position;
 
-  // 1. Contact nodes: each contact point snapped to its nearest surface node.
+  // 1. Contact nodes: each contact point snapped to its nearest surface node, or a region's spread nodes.
   std::vector<int> contacts;
-  for (const Eigen::Vector3d& p : spec.contact_points) {
+  if (spec.contact_region) {
+    const core::ContactRegionSpec& g = *spec.contact_region;
+    rep.region = select_region_contacts(surface, g.centre, g.radius, g.training_contacts, g.holdout_contacts);
+    contacts = rep.region.training;
+    rep.snap_distance = {rep.region.centre_snap_distance};
+    ContactRegion region;
+    region.centre = surface.position.row(rep.region.centre_node).transpose();
+    region.normal = surface.normal.row(rep.region.centre_node).transpose();
+    region.radius = g.radius;
+    d.region = region;
+    if (progress)
+      progress(fmt::format("contact region: {} surface nodes within {:.4g} mm of the centre node ({:.3g} mm from "
+                           "the configured centre): {} trained, {} held out",
+                           rep.region.region_nodes, g.radius * 1e3, rep.region.centre_snap_distance * 1e3,
+                           contacts.size(), rep.region.holdout.size()));
+  }
+  for (const Eigen::Vector3d& p : spec.contact_region ? std::vector<Eigen::Vector3d>{} : spec.contact_points) {
     double distance = 0.0;
     const int c = surface.nearest(p, &distance);
     for (int previous : contacts)
@@ -169,8 +194,9 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
   }
   rep.fit_seconds = seconds_since(t_fit);
 
-  // 4. Held-out forces.
-  const std::vector<PatchLoad> holdout = holdout_loads(spec, contacts);
+  // 4. Held-out forces: at the trained contacts, and at the region's untrained nodes.
+  std::vector<PatchLoad> holdout = holdout_loads(spec, contacts);
+  for (const PatchLoad& l : region_holdout_loads(spec, rep.region.holdout)) holdout.push_back(l);
   if (!holdout.empty()) {
     const std::vector<SolvedLoad> full = solve_patch_loads(
         problem, options.efg, surface, holdout, solve,
@@ -194,7 +220,8 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
          {"contact_displacement_m", e.contact_displacement},
          {"rmse_relative_to_contact_displacement", e.relative},
          {"rmse_relative_to_peak_contact_displacement", e.rmse / rep.peak_contact_displacement},
-         {"contact_error_m", e.contact_error}});
+         {"contact_error_m", e.contact_error},
+         {"trained_contact", e.trained_contact}});
   std::vector<double> snap_mm;
   for (double s : rep.snap_distance) snap_mm.push_back(s * 1e3);
   d.report = {{"training",
@@ -210,6 +237,17 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
               {"peak_contact_displacement_m", rep.peak_contact_displacement},
               {"holdout", holdouts},
               {"holdout_wall_seconds", rep.holdout.wall_seconds}};
+  if (d.region) {
+    auto positions_mm = [&](const std::vector<int>& nodes) {
+      nlohmann::json a = nlohmann::json::array();
+      for (int s : nodes)
+        a.push_back({1e3 * surface.position(s, 0), 1e3 * surface.position(s, 1), 1e3 * surface.position(s, 2)});
+      return a;
+    };
+    d.report["contact_region"] = {{"region_nodes", rep.region.region_nodes},
+                                  {"training_contacts_mm", positions_mm(rep.region.training)},
+                                  {"holdout_contacts_mm", positions_mm(rep.region.holdout)}};
+  }
   if (report) *report = rep;
   return d;
 }

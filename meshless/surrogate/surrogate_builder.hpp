@@ -28,6 +28,9 @@ std::vector<double> training_levels(const core::SurrogateSpec& spec);
 /// the contacts.
 std::vector<PatchLoad> holdout_loads(const core::SurrogateSpec& spec, const std::vector<int>& contacts);
 
+/// The held-out loads at a contact region's untrained nodes: every one of holdout_loads() at each node.
+std::vector<PatchLoad> region_holdout_loads(const core::SurrogateSpec& spec, const std::vector<int>& nodes);
+
 /// One held-out comparison.
 struct HoldoutError {
   PatchLoad load;
@@ -35,6 +38,7 @@ struct HoldoutError {
   double contact_displacement = 0.0;  ///< [m] |u| of the full model at the contact node
   double relative = 0.0;              ///< rmse / contact_displacement
   double contact_error = 0.0;         ///< [m] |u_surrogate - u_full| at the contact node
+  bool trained_contact = true;  ///< false: an untrained node of the contact region (the interpolation's error)
 };
 
 struct SurrogateBuildOptions {
@@ -44,7 +48,8 @@ struct SurrogateBuildOptions {
 };
 
 struct SurrogateBuildReport {
-  std::vector<double> snap_distance;  ///< [m] per contact point, to its surface node
+  std::vector<double> snap_distance;  ///< [m] per contact point, to its surface node (a region: its centre)
+  RegionContacts region;              ///< the contact region's nodes (empty without a region)
   PatchSolveReport training, holdout;
   int training_solves = 0;
   double fit_seconds = 0.0;

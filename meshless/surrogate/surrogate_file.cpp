@@ -185,7 +185,7 @@ json content(const SurrogateData& d) {
     positions.push_back(vec(Eigen::Vector3d(d.surface_position.row(s).transpose())));
   json contacts = json::array();
   for (const ContactFit& c : d.contacts) contacts.push_back(to_json(c));
-  return {{"format", kFormatName},
+  json out = {{"format", kFormatName},
           {"format_version", kSurrogateFormatVersion},
           {"case", {{"name", d.case_name}, {"hash", d.case_hash}}},
           {"units", units()},
@@ -198,6 +198,11 @@ json content(const SurrogateData& d) {
           {"surface", {{"vertex", d.surface_vertex}, {"position", positions}}},
           {"contacts", contacts},
           {"report", d.report}};
+  // Optional, so that files without a region (format 1 as first written) read unchanged.
+  if (d.region)
+    out["contact_region"] = {
+        {"centre", vec(d.region->centre)}, {"normal", vec(d.region->normal)}, {"radius", d.region->radius}};
+  return out;
 }
 
 }  // namespace
@@ -304,6 +309,16 @@ SurrogateData read_surrogate(const std::string& path, const std::optional<std::s
     for (std::size_t s = 0; s < positions.size(); ++s)
       d.surface_position.row(s) = vec(positions[s]).transpose();
     for (const json& c : j.at("contacts")) d.contacts.push_back(contact_from_json(c));
+    if (j.contains("contact_region")) {
+      const json& g = j.at("contact_region");
+      ContactRegion region;
+      region.centre = vec(g.at("centre"));
+      region.normal = vec(g.at("normal"));
+      region.radius = g.at("radius");
+      if (!(region.radius > 0.0) || !(region.normal.norm() > 0.0))
+        throw std::runtime_error("contact_region: expected a radius > 0 and a non-zero normal");
+      d.region = region;
+    }
     d.report = j.at("report");
     return d;
   } catch (const SurrogateFileError&) {
