@@ -138,6 +138,22 @@ TEST_F(BadCase, SupportTaperWiderThanTheRegion) {
   expect_error(write_case(base_), {"/fixed_region/taper", "35"});
 }
 
+TEST_F(BadCase, ContactRegionBesideContactPoints) {
+  base_["surrogate"] = {{"contact_points", {{-78.0, 0.0, 20.0}}},
+                        {"contact_region", {{"centre", {-78.0, 0.0, 20.0}}, {"radius", 20.0}}}};
+  expect_error(write_case(base_), {"/surrogate/contact_region", "either contact_points or a contact_region"});
+}
+
+TEST_F(BadCase, ContactRegionWithTooFewTrainingContacts) {
+  base_["surrogate"] = {{"contact_region", {{"centre", {-78.0, 0.0, 20.0}}, {"radius", 20.0}, {"training_contacts", 2}}}};
+  expect_error(write_case(base_), {"/surrogate/contact_region/training_contacts", "2"});
+}
+
+TEST_F(BadCase, ContactRegionWithoutARadius) {
+  base_["surrogate"] = {{"contact_region", {{"centre", {-78.0, 0.0, 20.0}}}}};
+  expect_error(write_case(base_), {"/surrogate/contact_region/radius", "required key is missing"});
+}
+
 TEST_F(BadCase, FixedRegionFarFromTheBody) {
   base_["fixed_region"]["point"] = {500.0, 0.0, 0.0};
   expect_error(write_case(base_), {"/fixed_region", "from the surface"});
