@@ -73,7 +73,20 @@ const std::vector<MeshlessVariant>& meshless_variants() {
   return variants;
 }
 
+std::vector<std::string> builtin_model_names() {
+  std::vector<std::string> names{"fem"};
+  for (const auto& v : meshless_variants()) names.push_back(v.name);
+  return names;
+}
+
 namespace {
+
+bool is_external(const ModelResult& r) { return r.role == "external"; }
+
+/// "–" for a model without timings (an external result), else the phase's seconds.
+std::string seconds_or_dash(const json& timings, const char* phase) {
+  return timings.is_object() ? fmt::format("{:.1f}", timings[phase].get<double>()) : std::string("–");
+}
 
 json cut_effect_summary(const Comparison& c) {
   auto uncut_of = [&](const std::string& name) -> const Eigen::MatrixXd& {
@@ -87,6 +100,7 @@ json cut_effect_summary(const Comparison& c) {
   const double peak = peak_magnitude(fem_effect);
   json models = json::object();
   for (const auto& [name, r] : c.models) {
+    if (is_external(r)) continue;  // another program's samples come without an uncut solve
     const Eigen::MatrixXd effect = r.sample_displacements - uncut_of(name);
     const double error = rmse(effect, fem_effect);
     models[name] = {{"rmse_mm", error * 1e3},
@@ -124,10 +138,11 @@ json comparison_summary(const Comparison& c) {
               {"max_sample_error_mm", max_error * 1e3},
               {"peak_sample_displacement_mm", peak_magnitude(r.sample_displacements) * 1e3},
               {"reference_error_bar_mm", c.error_bar.known ? json(c.error_bar.rms_mm) : json(nullptr)},
-              {"timings", phase_seconds(r)},
+              {"timings", is_external(r) ? json(nullptr) : phase_seconds(r)},
               {"details", r.details}};
     for (const auto& v : meshless_variants())
       if (v.name == name) m["role"] = v.role;
+    if (is_external(r)) m["role"] = "external";
     models[name] = m;
   }
   json summary = {
@@ -150,18 +165,22 @@ json comparison_summary(const Comparison& c) {
         {"details", c.reference.details}}},
       {"models", models}};
   if (!c.uncut_samples.empty()) summary["cut_effect"] = cut_effect_summary(c);
-  if (c.models.size() == 2) {
-    const auto& a = c.models[0].second.sample_displacements;
-    const auto& b = c.models[1].second.sample_displacements;
-    summary["difference_mm"] = models[c.models[0].first]["rmse_mm"].get<double>() -
-                               models[c.models[1].first]["rmse_mm"].get<double>();
-    summary["difference_definition"] = fmt::format("RMSE({}) - RMSE({}), the third column of the paper's Table 1",
-                                                   c.models[0].first, c.models[1].first);
+  std::vector<const std::pair<std::string, ModelResult>*> variants;  // the meshless variants: no external result
+  for (const auto& m : c.models)
+    if (!is_external(m.second)) variants.push_back(&m);
+  if (variants.size() == 2) {
+    const auto& [first, a_result] = *variants[0];
+    const auto& [second, b_result] = *variants[1];
+    const auto& a = a_result.sample_displacements;
+    const auto& b = b_result.sample_displacements;
+    summary["difference_mm"] = models[first]["rmse_mm"].get<double>() - models[second]["rmse_mm"].get<double>();
+    summary["difference_definition"] =
+        fmt::format("RMSE({}) - RMSE({}), the third column of the paper's Table 1", first, second);
     summary["variants_max_sample_difference_mm"] = (a - b).rowwise().norm().maxCoeff() * 1e3;
     if (c.has_cut && (a - b).cwiseAbs().maxCoeff() == 0.0)
       summary["warning"] = fmt::format("the case has a cut, yet {} and {} gave identical sample displacements: the "
                                        "meshless model does not distinguish the two variants",
-                                       c.models[0].first, c.models[1].first);
+                                       first, second);
   }
   return summary;
 }
@@ -213,10 +232,10 @@ std::string comparison_table_md(const Comparison& c, const json& s) {
                     c.models.empty() ? 0 : s["models"][c.models[0].first]["n_unflagged"].get<int>());
   for (const auto& [name, r] : c.models) {
     const json& m = s["models"][name];
-    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {:.1f} |\n", name, fixed(m["rmse_mm"], 4),
+    md += fmt::format("| {} | {} | {} | {} | {} | {} | {} | {} |\n", name, fixed(m["rmse_mm"], 4),
                       percent(m["rmse_relative_to_peak"]), fixed(m["rmse_unflagged_mm"], 4),
                       percent(m["rmse_unflagged_relative_to_peak"]), bar_text, fixed(m["max_sample_error_mm"], 4),
-                      m["timings"]["total_seconds"].get<double>());
+                      seconds_or_dash(m["timings"], "total_seconds"));
   }
   if (s.contains("difference_mm"))
     md += fmt::format("\nDifference ({}): **{:.4f} mm**.\n", s["difference_definition"].get<std::string>(),
@@ -233,6 +252,12 @@ std::string comparison_table_md(const Comparison& c, const json& s) {
   for (const auto& [name, m] : s["models"].items())
     if (m["details"].contains("solved_as_why"))
       md += fmt::format("\n{}: {}.\n", name, m["details"]["solved_as_why"].get<std::string>());
+  for (const auto& [name, m] : s["models"].items())
+    if (m.value("role", std::string()) == "external")
+      md += fmt::format("\n{}: external, another program's samples read from {} (positions within {:.6f} mm of the "
+                        "case's samples; no timings, no cut effect).\n",
+                        name, m["details"]["source"].get<std::string>(),
+                        m["details"]["largest_position_offset_mm"].get<double>());
   md += bar["known"].get<bool>()
             ? fmt::format("\nReference error bar: {} ({:.2f} % of the sample displacements; {}).\n",
                           bar_text + " mm", 100.0 * bar["relative"].get<double>(), bar["method"].get<std::string>())
@@ -272,7 +297,7 @@ std::string comparison_table_md(const Comparison& c, const json& s) {
   for (const char* phase : {"setup_seconds", "assembly_seconds", "solve_seconds", "total_seconds"}) {
     md += fmt::format("| {} | {:.1f} |", std::string(phase).substr(0, std::string(phase).find('_')),
                       s["reference"]["timings"][phase].get<double>());
-    for (const auto& [name, r] : c.models) md += fmt::format(" {:.1f} |", s["models"][name]["timings"][phase].get<double>());
+    for (const auto& [name, r] : c.models) md += " " + seconds_or_dash(s["models"][name]["timings"], phase) + " |";
     md += "\n";
   }
   return md;
@@ -417,7 +442,12 @@ void write_plot(const core::OutputDirectory& out, const std::string& case_name, 
 int run_compare(const std::string& config, const CompareOptions& options) {
   std::string why;
   if (!options.IsValid(&why)) throw std::invalid_argument("compare: " + why);
+  check_external_names(options.externals, builtin_model_names());
   const core::Case c = core::load_case(config);
+  // Other programs' files are read and checked now, their positions once the geometry has the samples: a wrong
+  // file is refused in seconds, never after the solves.
+  std::vector<ExternalSamples> external_samples;
+  for (const auto& e : options.externals) external_samples.push_back(read_external_samples(e.file, c.samples.count));
   if (options.reference_samples == "extrapolated" && !std::filesystem::exists(options.reference_error_file))
     throw std::runtime_error(fmt::format("--reference extrapolated needs the mesh study given by --reference-error, "
                                          "but {} does not exist; run `tissue verify fem --config {}` first",
@@ -438,6 +468,10 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   cmp.config = config;
   cmp.sample_points = g.sample_points;
   cmp.has_cut = g.cut.has_value();
+  std::vector<std::pair<std::string, ModelResult>> externals;
+  for (std::size_t i = 0; i < options.externals.size(); ++i)
+    externals.emplace_back(options.externals[i].name,
+                           external_model_result(external_samples[i], options.externals[i].name, g.sample_points));
 
   progress.step(fmt::format("FEM reference: deal.II set-up ({} tets, degree {})", g.fem_mesh.num_tets(), c.fem.degree));
   reference_fem::FemRunOptions fem_options;
@@ -475,6 +509,7 @@ int run_compare(const std::string& config, const CompareOptions& options) {
     cmp.models.emplace_back(variant.name, std::move(r));
   }
 
+  for (auto& e : externals) cmp.models.push_back(std::move(e));
   if (cmp.has_cut && options.cut_effect) solve_uncut(c, g, &progress, &cmp);
 
   progress.step("comparing at the samples and writing the results");
@@ -489,7 +524,8 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   write_text_file(out.file("case.json").string(), c.document.dump(2) + "\n");
   write_text_file(out.file("samples.csv").string(), comparison_samples_csv(cmp));
   write_timings_json(out.file("fem/timings.json").string(), cmp.reference);
-  for (const auto& [name, r] : cmp.models) write_timings_json(out.file(name + "/timings.json").string(), r);
+  for (const auto& [name, r] : cmp.models)
+    if (!is_external(r)) write_timings_json(out.file(name + "/timings.json").string(), r);
   Eigen::MatrixXd flagged(cmp.sample_points.rows(), 1);
   for (Eigen::Index i = 0; i < flagged.rows(); ++i) flagged(i, 0) = cmp.diagnostics.flagged(static_cast<std::size_t>(i));
   std::vector<VtuField> fields{{"fem", cmp.reference.sample_displacements}, {"flagged", flagged}};

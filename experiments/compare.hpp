@@ -1,7 +1,8 @@
 #pragma once
 // `tissue compare`: the FEM reference and both meshless variants (enrichment = the proposed model,
 // visibility = the baseline) on one case, evaluated at the same sample points (paper §5.4, eqs. 33–34).
-// The comparator sees only ModelResult (sample displacements and timings), never a model's inside.
+// The comparator sees only ModelResult (sample displacements and timings), never a model's inside, so another
+// program's samples (`--external NAME=FILE.csv`, role "external") are scored by the same code.
 //
 // Files written to the output folder (docs/EXPERIMENTS.md lists every column):
 //   case.json, samples.csv, summary.json, table.md, radar.png, samples.vtu,
@@ -13,6 +14,7 @@
 #include <vector>
 
 #include "experiments/compare_metrics.hpp"
+#include "experiments/external_result.hpp"
 #include "experiments/model_result.hpp"
 
 namespace experiments {
@@ -33,6 +35,9 @@ struct CompareOptions {
   /// Richardson-extrapolated samples of the mesh study in reference_error_file, which must have solved exactly this
   /// reference; their bar is the study's finest level's). The FEM is solved either way, to check the study.
   std::string reference_samples = "solved";
+  /// Other programs' sample displacements to score beside the built-in models (`--external NAME=FILE`), in the
+  /// order given; each is read and checked before any solve (experiments/external_result.hpp).
+  std::vector<ExternalSpec> externals;
 
   bool IsValid(std::string* why) const;
 };
@@ -50,7 +55,8 @@ struct Comparison {
   std::string config;
   Eigen::MatrixXd sample_points;  ///< #samples by 3 [m]
   ModelResult reference;          ///< the FEM reference
-  std::vector<std::pair<std::string, ModelResult>> models;  ///< meshless variants by name
+  /// By name: the meshless variants, then the external results (role "external") in the order given.
+  std::vector<std::pair<std::string, ModelResult>> models;
   SampleFlagRules rules;
   SampleDiagnostics diagnostics;
   ReferenceErrorBar error_bar;
@@ -66,7 +72,10 @@ struct Comparison {
   bool has_cut = false;
 };
 
-/// summary.json: per meshless model the eq. 34 RMSE (all samples and without the flagged ones), relative to
+/// The names of the models compare solves itself: the reference ("fem") and the meshless variants.
+std::vector<std::string> builtin_model_names();
+
+/// summary.json: per meshless or external model the eq. 34 RMSE (all samples and without the flagged ones), relative to
 /// the peak reference sample, beside the reference's error bar; the wall time of each phase per model.
 nlohmann::json comparison_summary(const Comparison& comparison);
 /// samples.csv: one row per sample and model (docs/EXPERIMENTS.md).

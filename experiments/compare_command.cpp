@@ -1,6 +1,9 @@
 #include "experiments/compare_command.hpp"
 
+#include <iostream>
+
 #include "experiments/compare.hpp"
+#include "experiments/external_result.hpp"
 #include "experiments/progress.hpp"
 
 namespace experiments {
@@ -10,11 +13,12 @@ void add_compare_command(CLI::App& app) {
   static CompareOptions options;
   static double edge_mm = -1.0, cut_mm = -1.0;
   static bool no_plot = false;
-  auto* cmd = app.add_subcommand(
-      "compare",
-      "Run the FEM reference and both meshless variants (enrichment = proposed, visibility = baseline) on one case "
-      "and compare them at the same samples: case.json, samples.csv, summary.json (eq. 34 RMSE, with and without "
-      "flagged samples, the reference's error bar, phase times), table.md, radar.png, VTU (docs/EXPERIMENTS.md)");
+  auto* cmd = app.add_subcommand("compare", "Score the meshless models and external results against the FEM reference");
+  cmd->footer(
+      "Runs the FEM reference and both meshless variants (enrichment = proposed, visibility = baseline) on one case,\n"
+      "reads the --external results of other programs (checked before any solve) and compares them all at the same\n"
+      "samples (eqs. 33-34). Writes case.json, samples.csv, summary.json (the eq. 34 RMSE with and without flagged\n"
+      "samples, the reference's error bar, phase times), table.md, radar.png and VTU files (docs/EXPERIMENTS.md).");
   cmd->add_option("CONFIG", config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   cmd->add_option("--out", options.out_dir, "Output folder (written atomically)")->required();
   cmd->add_option("--edge-distance", edge_mm,
@@ -34,12 +38,24 @@ void add_compare_command(CLI::App& app) {
   static bool no_cut_effect = false;
   cmd->add_flag("--no-cut-effect", no_cut_effect,
                 "Cut cases: do not solve each model without the cut (no cut-effect columns; two solves fewer)");
+  static std::vector<std::string> externals;
+  cmd->add_option("--external", externals,
+                  "Another program's sample displacements, scored as model NAME (repeatable); FILE has the columns of "
+                  "samples.csv, in mm (docs/EXPERIMENTS.md, \"Scoring another program\")")
+      ->type_name("NAME=FILE")
+      ->allow_extra_args(false);
   cmd->callback([] {
     if (edge_mm >= 0.0) options.patch_edge_distance = edge_mm * 1e-3;
     if (cut_mm >= 0.0) options.cut_distance = cut_mm * 1e-3;
     options.plot = !no_plot;
     options.cut_effect = !no_cut_effect;
-    throw CommandResult{run_compare(config, options)};
+    try {
+      for (const auto& e : externals) options.externals.push_back(parse_external_spec(e));
+      throw CommandResult{run_compare(config, options)};
+    } catch (const ExternalResultError& e) {  // a bad input file, like a bad case: exit 2, nothing written
+      std::cerr << "error: " << e.what() << "\n";
+      throw CommandResult{2};
+    }
   });
 }
 

@@ -31,6 +31,9 @@ struct StepTiming {
 
 struct ModelResult {
   std::string model;                    ///< "fem" or "meshless"
+  /// "external" for another program's samples read from a CSV (experiments/external_result.hpp): no timings, no
+  /// uncut solve, and never written back as timings.json. Empty for this program's own solves.
+  std::string role;
   Eigen::MatrixXd sample_points;        ///< #samples by 3, reference coordinates [m]
   Eigen::MatrixXd sample_displacements; ///< #samples by 3 at the last step [m]
   double setup_seconds = 0.0;
