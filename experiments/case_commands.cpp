@@ -81,14 +81,14 @@ void add_case_commands(CLI::App& app) {
   auto* group = app.add_subcommand("case", "Validate a load case and inspect its geometry");
   group->require_subcommand(1);
 
-  auto* check = group->add_subcommand("check", "Validate CONFIG and print the geometry summary (volume, "
-                                               "node and tet counts, fixed nodes, load patch, samples)");
+  auto* check = group->add_subcommand("check", "Validate CONFIG and print its geometry summary");
+  check->footer("The summary: volume, node and tet counts, fixed nodes, the load patch and the sample points.");
   static std::string check_config;
   check->add_option("CONFIG", check_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   check->callback([] { throw CommandResult{run_check(check_config)}; });
 
-  auto* mesh = group->add_subcommand("mesh", "Write VTU files of the FEM mesh, the node cloud, the "
-                                             "integration cells, the samples and the cut, with region tags");
+  auto* mesh = group->add_subcommand("mesh", "Write VTU files of both meshes, the samples and the cut");
+  mesh->footer("The FEM mesh, the node cloud and its integration cells, the samples and the cut, with region tags.");
   static std::string mesh_config, mesh_out;
   mesh->add_option("CONFIG", mesh_config, "Load-case JSON file")->required();
   mesh->add_option("--out", mesh_out, "Output folder (written atomically)")->required();

@@ -181,12 +181,10 @@ int run_check_patch(const FitArguments& a) {
 }  // namespace
 
 void add_fit_commands(CLI::App& app) {
-  auto* fit = app.add_subcommand(
-      "fit",
-      "Train the force -> displacement surrogate (paper §3, eqs. 25-28) on the case's node cloud with the "
-      "full "
-      "meshless model, fit it by linear least squares (orders by cross-validation), check it on held-out "
-      "forces and write FILE (docs/SURROGATE.md). Options come from the case's /surrogate block.");
+  auto* fit = app.add_subcommand("fit", "Train the force -> displacement surrogate (paper §3) and write it to FILE");
+  fit->footer("Trains the surrogate (eqs. 25-28) on the case's node cloud with the full meshless model, fits it by linear\n"
+              "least squares (orders by cross-validation), checks it on held-out forces and writes FILE. Options come\n"
+              "from the case's /surrogate block (docs/SURROGATE.md).");
   static FitArguments args;
   fit->add_option("CONFIG", args.config, "Load-case JSON file (schema: docs/CONFIG.md, /surrogate)")
       ->required();

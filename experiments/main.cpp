@@ -49,6 +49,8 @@ int main(int argc, char** argv) {
   experiments::add_sweep_command(app);
   experiments::add_rsr_command(app);
   experiments::add_reproduce_command(app);
+  // Set after the subcommands, which would otherwise inherit it: each states its own detail in its own footer.
+  app.footer("`tissue SUBCOMMAND --help` describes a subcommand: its options, what it computes and what it writes.");
   try {
     app.parse(argc, argv);
   } catch (const experiments::CommandResult& r) {

@@ -255,12 +255,10 @@ int run_replay(const ProbeArguments& a) {
 }  // namespace
 
 void add_probe_commands(CLI::App& app) {
-  auto* probe = app.add_subcommand("probe",
-                                   "Haptic probe mode on a surrogate file (docs/SURROGATE.md): read 'x y z "
-                                   "fx fy fz' (mm, N) lines from stdin and "
-                                   "print the contact-node displacement and the largest surface "
-                                   "displacement, or replay a device trace at a "
-                                   "fixed rate with deadlines (--trace)");
+  auto* probe = app.add_subcommand("probe", "Query a surrogate file as a haptic probe (stdin, or a replayed trace)");
+  probe->footer("Reads 'x y z fx fy fz' lines (mm, N) from stdin and prints the contact node's displacement and the largest\n"
+                "surface displacement, or replays a device trace at a fixed rate with deadlines (--trace;\n"
+                "docs/SURROGATE.md).");
   static ProbeArguments args;
   probe->add_option("SURROGATE", args.surrogate, "Surrogate file written by `tissue fit`")->required();
   probe->add_option("--case", args.config,

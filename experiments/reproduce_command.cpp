@@ -9,12 +9,11 @@ void add_reproduce_command(CLI::App& app) {
   static ReproduceOptions options;
   static bool no_plot = false, table1_only = false, timing_only = false;
   options.plan = std::string(TISSUE_SOURCE_DIR) + "/configs/reproduce.json";
-  auto* cmd = app.add_subcommand(
-      "reproduce",
-      "Reproduce the paper's Table 1 (RMSE of the proposed and the baseline meshless cutting models against the FEM "
-      "reference, §5.4) and the analogue of its Fig. 9 (time per deformation result for 8 forces, §5.5: the full meshless solve, the FEM "
-      "reference and the surrogate's query) on the cases of a plan file: table1.md/.json, timing.md/.json, timing.png and each case's compare folder "
-      "(docs/EXPERIMENTS.md)");
+  auto* cmd = app.add_subcommand("reproduce", "Reproduce the paper's Table 1 and the analogue of its Fig. 9");
+  cmd->footer("Table 1: the RMSE of the proposed and the baseline meshless cutting models against the FEM reference\n"
+              "(§5.4). Fig. 9: the time per deformation result for 8 forces (§5.5): the full meshless solve, the FEM\n"
+              "reference and the surrogate's query. Runs on the cases of a plan file and writes table1.md/.json,\n"
+              "timing.md/.json, timing.png and each case's compare folder (docs/EXPERIMENTS.md).");
   cmd->add_option("--plan", options.plan, "Plan JSON: the Table 1 cases with the paper's figures, the timing case, the surrogate's case")
       ->capture_default_str();
   cmd->add_option("--out", options.out_dir, "Output folder (written atomically)")->capture_default_str();

@@ -56,9 +56,9 @@ int run_rsr(const RsrOptions& opt) {
 
 void add_rsr_command(CLI::App& app) {
   static RsrOptions opt;
-  auto* rsr = app.add_subcommand(
-      "rsr", "Rank-sum-ratio evaluation (paper §5.6): ranks (Table 3), RSR (Table 4, eq. 36), probits (Table 5), "
-             "the regression RSR = a + b·Probit (eq. 37) and the grading (Table 6)");
+  auto* rsr = app.add_subcommand("rsr", "Rank-sum-ratio evaluation of the paper's §5.6 (Tables 3-6)");
+  rsr->footer("Ranks (Table 3), RSR (Table 4, eq. 36), probits (Table 5), the regression RSR = a + b·Probit (eq. 37)\n"
+              "and the grading (Table 6).");
   rsr->add_option("SCORES", opt.scores,
                   "Score CSV: header `name,I1,...,Im`, one row per object (default: the paper's Table 2)")
       ->capture_default_str();

@@ -168,31 +168,28 @@ void add_solve_commands(CLI::App& app) {
   auto* group = app.add_subcommand("solve", "Solve a load case with one model and write its results folder");
   group->require_subcommand(1);
 
-  auto* fem = group->add_subcommand(
-      "fem",
-      "deal.II FEM reference: VTU per output step (pvtu + one piece per MPI process), samples.csv (eq. 33, mm), "
-      "timings.json, case.json. Runs distributed under `mpirun -np N` (docs/FEM_REFERENCE.md)");
+  auto* fem = group->add_subcommand("fem", "The deal.II FEM reference (also under `mpirun -np N`)");
+  fem->footer("Writes a VTU per output step (pvtu + one piece per MPI process), samples.csv (eq. 33, mm), timings.json\n"
+              "and case.json. Runs distributed under `mpirun -np N` (docs/FEM_REFERENCE.md).");
   static std::string fem_config, fem_out;
   fem->add_option("CONFIG", fem_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   fem->add_option("--out", fem_out, "Output folder (written atomically)")->required();
   fem->callback([] { throw CommandResult{run_solve_fem(fem_config, fem_out)}; });
 
-  auto* efg = group->add_subcommand(
-      "meshless",
-      "EFG meshless model: VTU per output step, samples.csv (eq. 33, mm), timings.json, case.json. Under `mpirun -np "
-      "N` the PETSc Krylov solve is distributed over the N processes (for clouds too large to factorise; "
-      "docs/MESHLESS.md §2)");
+  auto* efg = group->add_subcommand("meshless", "The EFG meshless model (also under `mpirun -np N`)");
+  efg->footer("Writes a VTU per output step, samples.csv (eq. 33, mm), timings.json and case.json. Under `mpirun -np N`\n"
+              "the PETSc Krylov solve is distributed over the N processes (for clouds too large to factorise;\n"
+              "docs/MESHLESS.md §2).");
   static std::string efg_config, efg_out;
   efg->add_option("CONFIG", efg_config, "Load-case JSON file (schema: docs/CONFIG.md)")->required();
   efg->add_option("--out", efg_out, "Output folder (written atomically)")->required();
   efg->callback([] { throw CommandResult{run_solve_meshless(efg_config, efg_out)}; });
 
-  auto* cut = app.add_subcommand(
-      "cut",
-      "Progressive incision with the EFG model: the case's cut advances along its polyline in /cut/steps increments "
-      "(one at the start of each of the first /cut/steps time steps), each a local update of the shape functions "
-      "and a re-solve with the history carried over. Writes per output step the node cloud's cells and the opened "
-      "cut (VTU), then samples.csv, timings.json (with every update) and case.json");
+  auto* cut = app.add_subcommand("cut", "Progressive incision with the EFG model");
+  cut->footer("The case's cut advances along its polyline in /cut/steps increments (one at the start of each of the\n"
+              "first /cut/steps time steps), each a local update of the shape functions and a re-solve with the history\n"
+              "carried over. Writes per output step the node cloud's cells and the opened cut (VTU), then samples.csv,\n"
+              "timings.json (with every update) and case.json.");
   static std::string cut_config, cut_out;
   cut->add_option("CONFIG", cut_config, "Load-case JSON file with a /cut (schema: docs/CONFIG.md)")->required();
   cut->add_option("--out", cut_out, "Output folder (written atomically)")->required();

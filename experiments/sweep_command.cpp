@@ -12,11 +12,10 @@ void add_sweep_command(CLI::App& app) {
   static std::string sweep_file;
   static SweepOptions options;
   static bool dry_run = false, no_retry = false, no_plot = false;
-  auto* cmd = app.add_subcommand(
-      "sweep",
-      "Run `tissue compare` over the Cartesian product of case parameters (JSON pointers with lists of values); "
-      "resumable; one row per run appended to OUT/runs.csv, the current view in OUT/summary.{csv,md} and "
-      "OUT/sweep.png (docs/EXPERIMENTS.md)");
+  auto* cmd = app.add_subcommand("sweep", "Run `tissue compare` over a grid of case parameters (resumable)");
+  cmd->footer("The grid is the Cartesian product of case parameters (JSON pointers with lists of values). One row per\n"
+              "run is appended to OUT/runs.csv; the current view is in OUT/summary.{csv,md} and OUT/sweep.png\n"
+              "(docs/EXPERIMENTS.md).");
   cmd->add_option("SWEEP", sweep_file, "Sweep file (schema: docs/EXPERIMENTS.md; examples in configs/sweeps/)")
       ->required();
   cmd->add_option("--out", options.out_dir, "Sweep folder (default: results/sweeps/<name>)");

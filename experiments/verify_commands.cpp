@@ -277,9 +277,9 @@ int run_verify_fem(const VerifyFemOptions& opt) {
 void add_verify_commands(CLI::App& app) {
   auto* group = app.add_subcommand("verify", "Verify a model against closed forms and its own mesh convergence");
   group->require_subcommand(1);
-  auto* fem = group->add_subcommand(
-      "fem", "FEM reference: uniaxial relaxation/creep, Timoshenko cantilever L2 rate, lung mesh convergence; "
-             "writes fem.json and fem.md");
+  auto* fem = group->add_subcommand("fem", "The FEM reference: closed forms, cantilever rate, lung mesh convergence");
+  fem->footer("Uniaxial relaxation and creep against their closed forms, the Timoshenko cantilever's L2 rate and the lung\n"
+              "mesh convergence study (the reference's error bar for compare); writes fem.json and fem.md.");
   static VerifyFemOptions opt;
   fem->add_option("--out", opt.out, "Output folder (written atomically)")->capture_default_str();
   fem->add_option("--config", opt.configs, "Load cases for the mesh-convergence study")->capture_default_str();
@@ -289,9 +289,9 @@ void add_verify_commands(CLI::App& app) {
   fem->add_flag("--skip-lung", opt.skip_lung, "Only the closed-form checks (fast)");
   fem->callback([] { throw CommandResult{run_verify_fem(opt)}; });
 
-  auto* efg = group->add_subcommand(
-      "meshless", "EFG model: MLS invariants, patch test vs quadrature order, Timoshenko cantilever L2/energy rates, "
-                  "creep bar; writes meshless.json and meshless.md");
+  auto* efg = group->add_subcommand("meshless", "The EFG model: MLS invariants, patch test, cantilever rates, creep");
+  efg->footer("The MLS invariants, the patch test against the quadrature order, the Timoshenko cantilever's L2 and energy\n"
+              "rates and the creep bar; writes meshless.json and meshless.md.");
   static std::string efg_out = "results/verify";
   static bool efg_quick = false;
   efg->add_option("--out", efg_out, "Output folder (written atomically)")->capture_default_str();

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <string>
 
 namespace fs = std::filesystem;
@@ -330,6 +331,25 @@ TEST(Cli, HelpOnEverySubcommand) {
     EXPECT_EQ(r.exit_code, 0) << sub << "\n" << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << sub;
   }
+}
+
+TEST(Cli, TopLevelHelpListsEachSubcommandOnOneShortLine) {
+  const RunResult r = run("--help");
+  std::istringstream lines(r.output);
+  std::string line;
+  while (std::getline(lines, line) && line != "Subcommands:") {
+  }
+  int listed = 0;
+  while (std::getline(lines, line) && !line.empty()) {
+    ++listed;
+    // 30 columns of name, then one sentence: the detail belongs to `tissue SUBCOMMAND --help`.
+    EXPECT_LE(line.size(), 110u) << line;
+    EXPECT_TRUE(line.size() > 2 && line[2] != ' ') << "a description continued on another line:\n" << line;
+  }
+  EXPECT_GE(listed, 10) << r.output;
+  // The detail is in the subcommand's own help.
+  EXPECT_NE(run("compare --help").output.find("Writes case.json, samples.csv, summary.json"), std::string::npos);
+  EXPECT_NE(run("cut --help").output.find("a local update of the shape functions"), std::string::npos);
 }
 
 }  // namespace
