@@ -218,7 +218,8 @@ namespace {
 
 /// For each point of `now`, the row of `before` at the same place (same cell, same side, bitwise the same
 /// coordinates), or -1.
-std::vector<int> match_points(const ShapeTable& before, const QuadraturePoints& now) {
+template <class Points>  // QuadraturePoints or ShapeTable
+std::vector<int> match_points(const ShapeTable& before, const Points& now) {
   std::unordered_map<long long, std::vector<int>> by_cell;
   auto key = [](int cell, int side) { return 4LL * cell + (side + 1); };
   for (int q = 0; q < before.size(); ++q) by_cell[key(before.cells[q], before.sides[q])].push_back(q);
@@ -233,6 +234,35 @@ std::vector<int> match_points(const ShapeTable& before, const QuadraturePoints& 
       }
   }
   return match;
+}
+
+/// History (eqs. 15-16) carried onto the volume points `now`, `same` their matches in `before` (match_points): a
+/// point that is still there keeps its state; a new point (a cell split differently) takes the state of the nearest
+/// old point of the same cell.
+template <class Points>  // QuadraturePoints or ShapeTable
+std::vector<core::KelvinState> carried_history(const ShapeTable& before, const std::vector<core::KelvinState>& states,
+                                               const Points& now, const std::vector<int>& same) {
+  std::vector<core::KelvinState> carried(now.size());
+  std::unordered_map<int, std::vector<int>> old_points_of_cell;  // only the cells that have new points
+  for (int q = 0; q < now.size(); ++q)
+    if (same[q] < 0) old_points_of_cell[now.cells[q]];
+  for (int q = 0; q < before.size(); ++q)
+    if (const auto it = old_points_of_cell.find(before.cells[q]); it != old_points_of_cell.end()) it->second.push_back(q);
+  for (int q = 0; q < now.size(); ++q) {
+    if (same[q] >= 0) {
+      carried[q] = states[same[q]];
+      continue;
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (int old : old_points_of_cell.at(now.cells[q])) {
+      const double d = (before.points.row(old) - now.points.row(q)).squaredNorm();
+      if (d < best) {
+        best = d;
+        carried[q] = states[old];
+      }
+    }
+  }
+  return carried;
 }
 
 }  // namespace
@@ -377,26 +407,7 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
 
   // History (eqs. 15-16): a point that is still there keeps its state; a new point (a cell split differently)
   // takes the state of the nearest old point of the same cell.
-  std::vector<core::KelvinState> states(vq.size());
-  std::unordered_map<int, std::vector<int>> old_points_of_cell;  // only the cells that have new points
-  for (int q = 0; q < vq.size(); ++q)
-    if (volume_same[q] < 0) old_points_of_cell[vq.cells[q]];
-  for (int q = 0; q < volume_.size(); ++q)
-    if (const auto it = old_points_of_cell.find(volume_.cells[q]); it != old_points_of_cell.end()) it->second.push_back(q);
-  for (int q = 0; q < vq.size(); ++q) {
-    if (volume_same[q] >= 0) {
-      states[q] = states_[volume_same[q]];
-      continue;
-    }
-    double best = std::numeric_limits<double>::infinity();
-    for (int old : old_points_of_cell.at(vq.cells[q])) {
-      const double d = (volume_.points.row(old) - vq.points.row(q)).squaredNorm();
-      if (d < best) {
-        best = d;
-        states[q] = states_[old];
-      }
-    }
-  }
+  std::vector<core::KelvinState> states = carried_history(volume_, states_, vq, volume_same);
 
   report.quadrature_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
@@ -434,6 +445,17 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   report.seconds = seconds_since(t0);
   report.modified_nodes = cut_weights_->num_modified();
   return report;
+}
+
+void EfgModel::continue_from(const EfgModel& earlier) {
+  if (!set_up_ || !earlier.set_up_) throw std::logic_error("EfgModel::continue_from before setup_system");
+  auto same = [](const auto& a, const auto& b) { return a.rows() == b.rows() && a.cols() == b.cols() && a == b; };
+  if (!same(earlier.problem_.mesh.vertices, problem_.mesh.vertices) || !same(earlier.problem_.mesh.tets, problem_.mesh.tets))
+    throw std::invalid_argument(fmt::format("EfgModel '{}': continue_from needs the same node cloud and cells",
+                                            problem_.name));
+  states_ = carried_history(earlier.volume_, earlier.states_, volume_, match_points(earlier.volume_, volume_));
+  u_ = earlier.u_;
+  matrix_current_ = false;
 }
 
 void EfgModel::update_material(double dt) {

@@ -135,6 +135,13 @@ class EfgModel {
   /// again. Gives the same tables, and the same stiffness values, as a set-up with `cut` from the start, to
   /// round-off.
   CutUpdate advance_cut(const core::RuledSurface& cut);
+  /// After setup_system(): go on from the converged state of `earlier`, a model of the same node cloud and
+  /// background cells whose cut may differ. Takes its nodal parameters U and carries the history of its volume
+  /// points onto this model's points as advance_cut() does (the same point keeps its state; a point of a cell split
+  /// differently takes the state of the nearest old point of that cell). A full set-up that continues where another
+  /// model stopped: the reference a local update of the cut is compared with (tests/test_efg_cut.cpp).
+  /// @throws std::invalid_argument when the node clouds or the cells differ
+  void continue_from(const EfgModel& earlier);
 
   // --- results ---------------------------------------------------------------------------------------------
   /// u(X) = sum_i phi_i(X) U_i (eq. 7) at arbitrary material points, #points by 3 [m]. A point next to the cut
