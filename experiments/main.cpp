@@ -13,6 +13,7 @@
 #include "experiments/fit_commands.hpp"
 #include "experiments/probe_commands.hpp"
 #include "experiments/compare_command.hpp"
+#include "experiments/export_command.hpp"
 #include "experiments/progress.hpp"
 #include "experiments/reproduce_command.hpp"
 #include "experiments/rsr_command.hpp"
@@ -46,6 +47,7 @@ int main(int argc, char** argv) {
   experiments::add_fit_commands(app);
   experiments::add_probe_commands(app);
   experiments::add_compare_command(app);
+  experiments::add_export_commands(app);
   experiments::add_sweep_command(app);
   experiments::add_rsr_command(app);
   experiments::add_reproduce_command(app);
