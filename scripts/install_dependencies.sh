@@ -14,6 +14,7 @@ PACKAGES=(
   libmumps-dev           # MUMPS: the EFG model's direct solver (meshless/solvers/mumps_lu.hpp; also a PETSc dependency)
   openmpi-bin libopenmpi-dev  # mpirun for the distributed FEM reference and its MPI test (deal.II is built on OpenMPI)
   libpetsc-real-dev      # PETSc with hypre and Trilinos ML: the EFG model's AMG-Krylov solve (also a deal.II dependency)
+  calculix-ccx           # ccx: the independent FE code of `tissue export` and test_calculix_lung (docs/FEM_REFERENCE.md)
   python3 python3-matplotlib
   clang libclang-rt-14-dev    # libFuzzer: the short fuzzing run of the case and STL readers (build_and_test.sh)
 )
