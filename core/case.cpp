@@ -190,11 +190,22 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
     g.radius = region->positive("radius") * kMm;
     g.training_contacts = region->integer("training_contacts", 3, 64, g.training_contacts);
     g.holdout_contacts = region->integer("holdout_contacts", 0, 64, g.holdout_contacts);
+    g.position_order = region->integer("position_order", 0, 2, g.position_order);
+    if ((g.position_order + 1) * (g.position_order + 2) / 2 > g.training_contacts)
+      region->fail("position_order",
+                   fmt::format("expected a degree that {} training contacts determine (a degree-{} polynomial of the "
+                               "position has {} terms); lower position_order or raise training_contacts",
+                               g.training_contacts, g.position_order,
+                               (g.position_order + 1) * (g.position_order + 2) / 2));
     region->finish();
     s.contact_points = {g.centre};
     s.contact_region = g;
   }
   s.patch_radius = r->positive("patch_radius", load.radius / kMm) * kMm;
+  s.patch_profile = r->choice("patch_profile", {"uniform", "smooth"},
+                              std::string(s.contact_region ? "smooth" : "uniform")) == "smooth"
+                        ? SurrogateSpec::PatchProfile::smooth
+                        : SurrogateSpec::PatchProfile::uniform;
   s.max_force = r->in_range("max_force", 0.0, 1e4, false, true, s.max_force);
   s.force_levels = r->integer("force_levels", 2, 50, s.force_levels);
   s.response_time = r->choice("response_time", {"end_of_ramp", "end"}, std::string("end_of_ramp")) == "end"

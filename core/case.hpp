@@ -147,6 +147,9 @@ struct ContactRegionSpec {
   double radius = 0.0;        ///< [m] surface nodes within this (straight-line) distance of the centre node
   int training_contacts = 7;  ///< trained contact nodes, spread by farthest-point sampling (>= 3)
   int holdout_contacts = 4;   ///< untrained region nodes solved in full to measure the interpolation
+  /// Degree of eq. 28's coefficients as polynomials of the contact position (0, 1 or 2; at most as many
+  /// terms, 1/3/6, as training contacts; 2 needs contacts inside the rim too, about 10).
+  int position_order = 1;
 };
 
 struct SurrogateSpec {
@@ -159,6 +162,11 @@ struct SurrogateSpec {
   std::vector<Eigen::Vector3d> contact_points;
   std::optional<ContactRegionSpec> contact_region;  ///< a region instead of points (exclusive with them)
   double patch_radius = 0.0;  ///< [m] traction patch around a contact node; absent -> load.radius
+  /// The training traction over the patch: uniform on whole faces, or the smooth profile (1 - (r/R)^2)^2, which
+  /// a contact region needs (its response is continuous in the contact point). Absent: smooth with a
+  /// contact_region, uniform otherwise.
+  enum class PatchProfile { uniform, smooth };
+  PatchProfile patch_profile = PatchProfile::uniform;
   /// [N] every force component is trained over [-max_force, max_force]: forces up to the paper's 4 N in magnitude.
   double max_force = 4.0;
   int force_levels = 4;       ///< trained levels per sign and axis, evenly spaced up to max_force (0 excluded)

@@ -113,7 +113,7 @@ int run_fit(const FitArguments& a) {
   const int holdouts =
       spec.holdout_forces * (1 + (spec.contact_region ? spec.contact_region->holdout_contacts : 0));
   const int solves = 3 * contacts * 2 * spec.force_levels;
-  Progress progress("fit", 3 + solves + contacts + holdouts + (spec.contact_region ? 1 : 0));
+  Progress progress("fit", 3 + solves + contacts + holdouts + (spec.contact_region ? 2 : 0));
   progress.step("building geometry and the node cloud (Gmsh)");
   const core::Geometry g = node_cloud(c);
   meshless::SurrogateBuildOptions options;

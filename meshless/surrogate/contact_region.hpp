@@ -1,17 +1,12 @@
 #pragma once
 // A contact region of the surrogate (docs/SURROGATE.md §4, "A contact region"): a patch of the surface that a
-// haptic probe may touch anywhere, covered by a few trained contact nodes, and the interpolation in the contact
-// position between them.
+// haptic probe may touch anywhere, covered by a few trained contact nodes. This file chooses those nodes and
+// interpolates the contact node's own response (eqs. 25-27) between them; the surface's response (eq. 28) over
+// the region is one fit with the contact position as a variable (region_field.hpp).
 //
-// A query at a point p of the region answers with ONE dent at p, not a weighted sum of the trained dents at
-// their own places (which would be several partial dents). Each trained contact's eq. 28 field is split into
-// its smooth part (the polynomial of the surface-local frame: how the whole body follows the load) and its
-// contact part (the regularised Kelvin terms, which depend only on X - p_c and the frame's orientation). The
-// smooth parts are interpolated where they are; the contact parts are TRANSPORTED to p (evaluated at X - p)
-// and then interpolated. The interpolation weights w_c(p) are the cardinal functions of a thin-plate spline
-// with a linear polynomial in the region's tangent plane: they interpolate (w_c(p_d) = delta_cd, so a query
-// at a trained contact returns that contact's fit exactly), sum to one and reproduce linear functions of the
-// position.
+// The interpolation weights w_c(p) are the cardinal functions of a thin-plate spline with a linear polynomial in
+// the region's tangent plane: they interpolate (w_c(p_d) = delta_cd, so a query at a trained contact returns that
+// contact's eqs. 25-27 exactly), sum to one and reproduce linear functions of the position.
 //
 // Units: SI (m). Lifetime and threads: ContactInterpolation is immutable after construction; weights() is
 // const, allocates nothing and may run from several threads at once.

@@ -9,39 +9,6 @@ namespace meshless {
 namespace {
 constexpr int kMaxOrder = 8;  // largest force order a surrogate may hold (SurrogateFitOptions::IsValid)
 constexpr int kMaxRegionContacts = 64;  // core::ContactRegionSpec::training_contacts is at most 64
-constexpr int kMaxDentOrder = 6;        // the file reader's largest contact order c
-/// The degree <= 2 monomials of a direction e, in the order of the rows of dent_:
-/// 1, e0, e1, e2, e0^2, e0 e1, e0 e2, e1^2, e1 e2, e2^2.
-constexpr int kDirectionMonomials = 10;
-
-/// Column layout of nodal_: the force powers of x (field order), then of y, then of z.
-int field_columns(const ContactFit& c) {
-  int columns = 0;
-  for (const AxisFit& a : c.axis) columns += a.field_order;
-  return columns;
-}
-
-/// The monomial rows (into the 10 above) and weights of e_f^(p,q,r), a monomial of degree <= 2 of the direction in
-/// a frame f whose rows of `rotation` are its axes (e_f = R e), written in the global direction e.
-Eigen::Matrix<double, kDirectionMonomials, 1> global_monomial(const Eigen::Matrix3d& rotation, int p, int q, int r) {
-  Eigen::Matrix<double, kDirectionMonomials, 1> out = Eigen::Matrix<double, kDirectionMonomials, 1>::Zero();
-  int axes[2], n = 0;
-  for (int k = 0; k < p; ++k) axes[n++] = 0;
-  for (int k = 0; k < q; ++k) axes[n++] = 1;
-  for (int k = 0; k < r; ++k) axes[n++] = 2;
-  if (n == 0) {
-    out(0) = 1.0;
-  } else if (n == 1) {
-    out.segment<3>(1) = rotation.row(axes[0]).transpose();
-  } else {
-    // e_f[a] e_f[b] = sum_uv R(a,u) R(b,v) e_u e_v; the monomial e_u e_v (u < v) collects both orders.
-    const int index[3][3] = {{4, 5, 6}, {5, 7, 8}, {6, 8, 9}};
-    for (int u = 0; u < 3; ++u)
-      for (int v = 0; v < 3; ++v) out(index[u][v]) += rotation(axes[0], u) * rotation(axes[1], v);
-  }
-  return out;
-}
-
 /// The force powers of one contact: adds `weight` times its eqs. 25-27 (the three axes superposed) to
 /// `contact_displacement`, and writes sigma_j^p in the column order of nodal_ into `field_powers` (3 * kMaxOrder).
 Eigen::Map<const Eigen::VectorXd> force_powers(const ContactFit& fit, const Eigen::Vector3d& force,
@@ -92,50 +59,14 @@ Surrogate::Surrogate(SurrogateData data, double contact_tolerance) : data_(std::
   }
   if (!data_.region) return;
 
-  // The contact region: split each contact's eq. 28 into its smooth part (evaluated at the nodes once, like
-  // nodal_) and its contact terms (re-expressed in the global direction, so that they can be blended between
-  // contacts and evaluated at X - p for any query point p).
+  // The contact region: eqs. 25-27 interpolated between the trained contacts, eq. 28 from the region's field.
   if (num_contacts() < 3 || num_contacts() > kMaxRegionContacts)
     throw std::invalid_argument("Surrogate: a contact region needs 3 to 64 trained contacts");
+  if (!data_.region_field) throw std::invalid_argument("Surrogate: a contact region without its field");
   std::vector<Eigen::Vector3d> positions;
-  contact_length_ = data_.contacts.front().frame.contact_length;
-  for (const ContactFit& c : data_.contacts) {
-    positions.push_back(data_.surface_position.row(c.contact).transpose());
-    if (std::abs(c.frame.contact_length - contact_length_) > 1e-12 * contact_length_)
-      throw std::invalid_argument("Surrogate: the contacts of a region must share one contact length");
-    for (const AxisFit& a : c.axis)
-      for (const InducedFieldFit& f : a.field) dent_order_ = std::max(dent_order_, f.contact_order);
-  }
-  if (dent_order_ > kMaxDentOrder) throw std::invalid_argument("Surrogate: contact order above 6");
+  for (const ContactFit& c : data_.contacts) positions.push_back(data_.surface_position.row(c.contact).transpose());
   interpolation_.emplace(*data_.region, positions);
-  for (const ContactFit& c : data_.contacts) {
-    Eigen::Matrix3d rotation;
-    rotation << c.frame.tangent1.transpose(), c.frame.tangent2.transpose(), c.frame.normal.transpose();
-    Eigen::MatrixXd smooth(3 * num_surface_nodes(), field_columns(c));
-    Eigen::MatrixXd dent = Eigen::MatrixXd::Zero(3 * std::max(dent_order_, 1) * kDirectionMonomials, smooth.cols());
-    int col = 0;
-    for (const AxisFit& a : c.axis) {
-      AxisFit polynomial = a;  // the same fit with its contact terms' coefficients set to zero
-      for (int i = 0; i < 3; ++i) {
-        const InducedFieldFit& f = a.field[i];
-        const SpatialBasis basis(f.tangential_order, f.normal_order, f.contact_order,
-                                 c.frame.contact_length / c.frame.length);
-        for (int k = 0; k < basis.size(); ++k) {
-          const BasisTerm& t = basis.terms()[k];
-          if (t.m == 0) continue;
-          polynomial.field[i].coefficients.row(k).setZero();
-          const auto monomial = global_monomial(rotation, t.p, t.q, t.r);
-          const int row = (i * dent_order_ + t.m - 1) * kDirectionMonomials;
-          for (int p = 0; p < a.field_order; ++p)
-            dent.block(row, col + p, kDirectionMonomials, 1) += f.coefficients(k, p) * monomial;
-        }
-      }
-      smooth.middleCols(col, a.field_order) = nodal_coefficients(surface, c.frame, polynomial);
-      col += a.field_order;
-    }
-    smooth_.push_back(std::move(smooth));
-    dent_.push_back(std::move(dent));
-  }
+  region_field_.emplace(*data_.region_field, data_.surface_position);
 }
 
 SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Vector3d& force,
@@ -194,50 +125,19 @@ void Surrogate::interpolate_in_region(const Eigen::Vector3d& point, SurrogateRes
   const int nc = num_contacts(), ns = num_surface_nodes();
   double weight[kMaxRegionContacts];
   interpolation_->weights(point, weight);
-
-  // The stressed point (eqs. 25-27) and the smooth part of eq. 28, interpolated; the contact terms' coefficients,
-  // interpolated in the global direction monomials.
-  constexpr int kDentRows = 3 * kMaxDentOrder * kDirectionMonomials;
-  double dent_storage[kDentRows];
-  const int dent_rows = static_cast<int>(dent_.front().rows());
-  Eigen::Map<Eigen::VectorXd> dent(dent_storage, dent_rows);
-  dent.setZero();
-  Eigen::Map<Eigen::VectorXd> u(surface->data(), 3 * ns);
-  u.setZero();
   r->contact_displacement.setZero();
   for (int c = 0; c < nc; ++c) {
-    if (weight[c] == 0.0) continue;
     double field_powers[3 * kMaxOrder];
-    const Eigen::Map<const Eigen::VectorXd> sigma =
-        force_powers(data_.contacts[c], r->force, &r->contact_displacement, field_powers, weight[c]);
-    u.noalias() += weight[c] * (smooth_[c] * sigma);
-    dent.noalias() += weight[c] * (dent_[c] * sigma);
+    force_powers(data_.contacts[c], r->force, &r->contact_displacement, field_powers, weight[c]);
   }
+  region_field_->evaluate(point, r->force, surface->data());  // row-major #S by 3
 
-  // The contact terms transported to the query point: s^m e^alpha with e = (X - p) / rho, s = l / rho,
-  // rho = sqrt(|X - p|^2 + l^2) (surrogate_basis.hpp; these are independent of the frame's length scale).
-  const double l2 = contact_length_ * contact_length_;
   double nearest = std::numeric_limits<double>::infinity();
   for (int s = 0; s < ns; ++s) {
-    const Eigen::Vector3d d = data_.surface_position.row(s).transpose() - point;
-    const double d2 = d.squaredNorm();
+    const double d2 = (data_.surface_position.row(s).transpose() - point).squaredNorm();
     if (d2 < nearest) {
       nearest = d2;
       r->contact_node = s;
-    }
-    const double rho = std::sqrt(d2 + l2);
-    const Eigen::Vector3d e = d / rho;
-    const double monomial[kDirectionMonomials] = {1.0,        e[0],        e[1],        e[2],        e[0] * e[0],
-                                                  e[0] * e[1], e[0] * e[2], e[1] * e[1], e[1] * e[2], e[2] * e[2]};
-    double s_power = 1.0;
-    for (int m = 0; m < dent_order_; ++m) {
-      s_power *= contact_length_ / rho;
-      for (int i = 0; i < 3; ++i) {
-        const double* coefficient = dent_storage + (i * dent_order_ + m) * kDirectionMonomials;
-        double v = 0.0;
-        for (int k = 0; k < kDirectionMonomials; ++k) v += coefficient[k] * monomial[k];
-        u[3 * s + i] += s_power * v;
-      }
     }
   }
   r->contact_distance = std::sqrt(nearest);

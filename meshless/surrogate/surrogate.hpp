@@ -14,6 +14,7 @@
 
 #include "core/tet_mesh.hpp"
 #include "meshless/surrogate/contact_region.hpp"
+#include "meshless/surrogate/region_field.hpp"
 #include "meshless/surrogate/surrogate_fit.hpp"
 
 namespace meshless {
@@ -25,14 +26,17 @@ struct SurrogateData {
   double max_force = 0.0;              ///< [N] every component was trained over [-max_force, max_force]
   std::vector<double> levels;          ///< trained signed levels [N]
   double patch_radius = 0.0;           ///< [m] traction patch of the training loads
+  std::string patch_profile = "uniform";  ///< its traction: "uniform" or "smooth" (surrogate_load_patch.hpp)
   std::string response_time;           ///< "end_of_ramp" or "end"
   double response_seconds = 0.0;       ///< the simulated time at which displacements were recorded [s]
   std::vector<int> surface_vertex;     ///< #S node ids in the case's meshless node cloud
   core::PointMatrix surface_position;  ///< #S by 3 [m]
   std::vector<ContactFit> contacts;    ///< contact indices refer to the surface nodes above
-  /// Set: every contact above is a trained contact of this region, and a query inside it interpolates between
-  /// them (contact_region.hpp); unset: a query takes the nearest trained contact.
+  /// Set: every contact above is a trained contact of this region, and a query inside it answers with
+  /// region_field (eq. 28 with the contact position as a variable, region_field.hpp) and eqs. 25-27 interpolated
+  /// between the contacts (contact_region.hpp); unset: a query takes the nearest trained contact.
   std::optional<ContactRegion> region;
+  std::optional<RegionField> region_field;  ///< set exactly when region is
   nlohmann::json report;  ///< training figures, held-out errors, timings (for people, not queries)
 };
 
@@ -84,14 +88,9 @@ class Surrogate {
   double tolerance_ = 0.0;
   std::vector<Eigen::MatrixXd>
       nodal_;  ///< per contact: 3S by sum_j lambda_j, columns sigma_x^1.., sigma_y^1..
-  // With a contact region (contact_region.hpp):
+  // With a contact region: eqs. 25-27 interpolated, eq. 28 as one field of the position.
   std::optional<ContactInterpolation> interpolation_;
-  std::vector<Eigen::MatrixXd> smooth_;  ///< per contact: nodal_ of the polynomial terms alone
-  /// Per contact: the contact terms' coefficients as monomials of the GLOBAL direction e = (X - p) / rho,
-  /// rows (component i, order m, monomial), columns as nodal_'s; see kDirectionMonomials in surrogate.cpp.
-  std::vector<Eigen::MatrixXd> dent_;
-  int dent_order_ = 0;           ///< largest contact order m over the contacts' fields
-  double contact_length_ = 0.0;  ///< [m] l of the contact terms, common to every contact
+  std::optional<RegionFieldEvaluator> region_field_;
 };
 
 }  // namespace meshless

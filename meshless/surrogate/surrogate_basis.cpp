@@ -50,14 +50,16 @@ SpatialBasis::SpatialBasis(int tangential_order, int normal_order, int contact_o
         for (int r = 0; r <= degree - q; ++r) terms_.push_back({degree - q - r, q, r, m});
 }
 
-void SpatialBasis::evaluate(const Eigen::Vector3d& local, double* out) const {
+void SpatialBasis::evaluate(const Eigen::Vector3d& local, const Eigen::Vector3d& contact_offset,
+                            double* out) const {
   // Powers once per coordinate, then products: a few dozen multiplications per point.
   double pw[3][kMaxPower], ew[3][kContactDegree + 1], sw[kMaxPower];
-  const double rho = std::sqrt(local.squaredNorm() + ell_ * ell_);
+  const double rho = std::sqrt(contact_offset.squaredNorm() + ell_ * ell_);
   for (int k = 0; k < 3; ++k) {
     pw[k][0] = ew[k][0] = 1.0;
     for (int n = 1; n < kMaxPower; ++n) pw[k][n] = pw[k][n - 1] * local[k];
-    for (int n = 1; n <= kContactDegree; ++n) ew[k][n] = ew[k][n - 1] * (c_ > 0 ? local[k] / rho : 0.0);
+    for (int n = 1; n <= kContactDegree; ++n)
+      ew[k][n] = ew[k][n - 1] * (c_ > 0 ? contact_offset[k] / rho : 0.0);
   }
   sw[0] = 1.0;
   for (int n = 1; n <= c_; ++n) sw[n] = sw[n - 1] * ell_ / rho;

@@ -59,7 +59,11 @@ class SpatialBasis {
   const std::vector<BasisTerm>& terms() const { return terms_; }
 
   /// psi_k at local coordinates (xi, eta, zeta); `out` gets size() values.
-  void evaluate(const Eigen::Vector3d& local, double* out) const;
+  void evaluate(const Eigen::Vector3d& local, double* out) const { evaluate(local, local, out); }
+  /// The same with the contact terms centred elsewhere: the polynomial terms at `local`, the contact terms at
+  /// `contact_offset` = local(X) - local(contact point). The basis of a contact region (region_field.hpp) moves
+  /// its contact terms with the probe while its polynomial stays in the region's frame.
+  void evaluate(const Eigen::Vector3d& local, const Eigen::Vector3d& contact_offset, double* out) const;
   /// #points by size() matrix of psi_k at the given local coordinates (#points by 3).
   Eigen::MatrixXd evaluate(const Eigen::MatrixX3d& local) const;
   /// Column indices of the terms of orders (a', b', c') inside this basis.

@@ -100,6 +100,7 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
   const SurfaceNodes surface = surface_nodes(problem.mesh);
   PatchSolveOptions solve;
   solve.patch_radius = spec.patch_radius;
+  solve.smooth_profile = spec.patch_profile == core::SurrogateSpec::PatchProfile::smooth;
   solve.response_step = response_step(problem, spec.response_time == core::SurrogateSpec::ResponseTime::end);
   solve.memory_budget_bytes = options.memory_budget_bytes;
   solve.max_workers = options.max_workers;
@@ -108,6 +109,7 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
   d.max_force = spec.max_force;
   d.levels = training_levels(spec);
   d.patch_radius = spec.patch_radius;
+  d.patch_profile = solve.smooth_profile ? "smooth" : "uniform";
   d.response_time = spec.response_time == core::SurrogateSpec::ResponseTime::end ? "end" : "end_of_ramp";
   d.response_seconds = problem.step_times[solve.response_step - 1];
   d.surface_vertex = surface.vertex;
@@ -192,6 +194,16 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
                            seconds_since(t0)));
     }
   }
+  if (d.region) {
+    const auto t0 = std::chrono::steady_clock::now();
+    d.region_field = fit_region_field(surface, *d.region, rep.training_data, spec.max_force, region_shape(d.contacts),
+                                      spec.contact_region->position_order, fit);
+    if (progress)
+      progress(fmt::format("fit the region's eq. 28 (position degree {}) over {} contacts: training RMS {:.3g} mm "
+                           "({:.1f} s)",
+                           d.region_field->position_order, d.contacts.size(), d.region_field->training_rms * 1e3,
+                           seconds_since(t0)));
+  }
   rep.fit_seconds = seconds_since(t_fit);
 
   // 4. Held-out forces: at the trained contacts, and at the region's untrained nodes.
@@ -245,6 +257,7 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
       return a;
     };
     d.report["contact_region"] = {{"region_nodes", rep.region.region_nodes},
+                                  {"field_training_rms_m", d.region_field->training_rms},
                                   {"training_contacts_mm", positions_mm(rep.region.training)},
                                   {"holdout_contacts_mm", positions_mm(rep.region.holdout)}};
   }

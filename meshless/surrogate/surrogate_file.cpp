@@ -76,6 +76,80 @@ std::vector<CvScore> scores(const json& j) {
   return v;
 }
 
+json frame_json(const SurfaceFrame& f) {
+  return {{"origin", vec(f.origin)},     {"tangent1", vec(f.tangent1)}, {"tangent2", vec(f.tangent2)},
+          {"normal", vec(f.normal)},     {"length", f.length},          {"contact_length", f.contact_length}};
+}
+SurfaceFrame frame_from_json(const json& j) {
+  SurfaceFrame f;
+  f.origin = vec(j.at("origin"));
+  f.tangent1 = vec(j.at("tangent1"));
+  f.tangent2 = vec(j.at("tangent2"));
+  f.normal = vec(j.at("normal"));
+  f.length = j.at("length");
+  f.contact_length = j.at("contact_length");
+  if (!(f.length > 0.0) || !(f.contact_length > 0.0)) throw std::runtime_error("non-positive frame lengths");
+  return f;
+}
+
+/// The orders (a, b, c) of an eq. 28 component, checked against the ranges the reader accepts.
+void read_orders(const json& j, InducedFieldFit* f) {
+  f->tangential_order = j.at("a");
+  f->normal_order = j.at("b");
+  f->contact_order = j.at("c");
+  if (f->tangential_order < 0 || f->tangential_order > 12 || f->normal_order < 0 || f->normal_order > 8 ||
+      f->contact_order < 0 || f->contact_order > 6)
+    throw std::runtime_error("eq. 28 orders outside their ranges");
+}
+
+json region_field_json(const RegionField& r) {
+  json axes = json::array();
+  for (int j = 0; j < 3; ++j) {
+    json fields = json::array();
+    for (int i = 0; i < 3; ++i) {
+      const InducedFieldFit& f = r.axis[j].field[i];
+      fields.push_back({{"component", kAxisName[i]},
+                        {"a", f.tangential_order},
+                        {"b", f.normal_order},
+                        {"c", f.contact_order},
+                        {"coefficients", matrix(f.coefficients)}});
+    }
+    axes.push_back({{"axis", kAxisName[j]}, {"field_lambda", r.axis[j].field_order}, {"induced_field", fields}});
+  }
+  return {{"frame", frame_json(r.frame)},
+          {"radius", r.radius},
+          {"position_order", r.position_order},
+          {"training_rms", r.training_rms},
+          {"axes", axes}};
+}
+RegionField region_field_from_json(const json& j) {
+  RegionField r;
+  r.frame = frame_from_json(j.at("frame"));
+  r.radius = j.at("radius");
+  r.position_order = j.at("position_order");
+  if (!(r.radius > 0.0) || r.position_order < 0 || r.position_order > 2)
+    throw std::runtime_error("contact_region.field: expected a radius > 0 and a position order in [0, 2]");
+  r.training_rms = j.at("training_rms");
+  if (j.at("axes").size() != 3) throw std::runtime_error("contact_region.field: expected 3 axes");
+  for (int k = 0; k < 3; ++k) {
+    const json& a = j.at("axes")[k];
+    RegionAxisField& axis = r.axis[k];
+    axis.field_order = a.at("field_lambda");
+    if (axis.field_order < 1 || axis.field_order > 8) throw std::runtime_error("field lambda outside [1, 8]");
+    if (a.at("induced_field").size() != 3) throw std::runtime_error("expected 3 induced-field components");
+    for (int i = 0; i < 3; ++i) {
+      const json& fj = a.at("induced_field")[i];
+      InducedFieldFit& f = axis.field[i];
+      read_orders(fj, &f);
+      const SpatialBasis basis(f.tangential_order, f.normal_order, f.contact_order,
+                               r.frame.contact_length / r.frame.length);
+      f.coefficients = matrix(fj.at("coefficients"), basis.size() * position_monomials(r.position_order),
+                              axis.field_order);
+    }
+  }
+  return r;
+}
+
 json to_json(const ContactFit& c) {
   json axes = json::array();
   for (int j = 0; j < 3; ++j) {
@@ -118,13 +192,7 @@ json to_json(const ContactFit& c) {
     summaries.push_back(std::move(one));
   }
   return {{"surface_node", c.contact},
-          {"frame",
-           {{"origin", vec(c.frame.origin)},
-            {"tangent1", vec(c.frame.tangent1)},
-            {"tangent2", vec(c.frame.tangent2)},
-            {"normal", vec(c.frame.normal)},
-            {"length", c.frame.length},
-            {"contact_length", c.frame.contact_length}}},
+          {"frame", frame_json(c.frame)},
           {"axes", axes},
           {"ceres_summaries", summaries}};
 }
@@ -132,15 +200,7 @@ json to_json(const ContactFit& c) {
 ContactFit contact_from_json(const json& j) {
   ContactFit c;
   c.contact = j.at("surface_node");
-  const json& f = j.at("frame");
-  c.frame.origin = vec(f.at("origin"));
-  c.frame.tangent1 = vec(f.at("tangent1"));
-  c.frame.tangent2 = vec(f.at("tangent2"));
-  c.frame.normal = vec(f.at("normal"));
-  c.frame.length = f.at("length");
-  c.frame.contact_length = f.at("contact_length");
-  if (!(c.frame.length > 0.0) || !(c.frame.contact_length > 0.0))
-    throw std::runtime_error("non-positive frame lengths");
+  c.frame = frame_from_json(j.at("frame"));
   if (j.at("axes").size() != 3) throw std::runtime_error("expected 3 axes per contact");
   for (int k = 0; k < 3; ++k) {
     const json& a = j.at("axes")[k];
@@ -159,12 +219,7 @@ ContactFit contact_from_json(const json& j) {
     for (int i = 0; i < 3; ++i) {
       const json& fj = a.at("induced_field")[i];
       InducedFieldFit& field = axis.field[i];
-      field.tangential_order = fj.at("a");
-      field.normal_order = fj.at("b");
-      field.contact_order = fj.at("c");
-      if (field.tangential_order < 0 || field.tangential_order > 12 || field.normal_order < 0 ||
-          field.normal_order > 8 || field.contact_order < 0 || field.contact_order > 6)
-        throw std::runtime_error("eq. 28 orders outside their ranges");
+      read_orders(fj, &field);
       const SpatialBasis basis(field.tangential_order, field.normal_order, field.contact_order,
                                c.frame.contact_length / c.frame.length);
       field.coefficients = matrix(fj.at("coefficients"), basis.size(), axis.field_order);
@@ -193,6 +248,7 @@ json content(const SurrogateData& d) {
            {{"max_force", d.max_force},
             {"levels", d.levels},
             {"patch_radius", d.patch_radius},
+            {"patch_profile", d.patch_profile},
             {"response_time", d.response_time},
             {"response_seconds", d.response_seconds}}},
           {"surface", {{"vertex", d.surface_vertex}, {"position", positions}}},
@@ -200,8 +256,10 @@ json content(const SurrogateData& d) {
           {"report", d.report}};
   // Optional, so that files without a region (format 1 as first written) read unchanged.
   if (d.region)
-    out["contact_region"] = {
-        {"centre", vec(d.region->centre)}, {"normal", vec(d.region->normal)}, {"radius", d.region->radius}};
+    out["contact_region"] = {{"centre", vec(d.region->centre)},
+                             {"normal", vec(d.region->normal)},
+                             {"radius", d.region->radius},
+                             {"field", region_field_json(d.region_field.value())}};
   return out;
 }
 
@@ -299,6 +357,7 @@ SurrogateData read_surrogate(const std::string& path, const std::optional<std::s
     d.max_force = t.at("max_force");
     d.levels = t.at("levels").get<std::vector<double>>();
     d.patch_radius = t.at("patch_radius");
+    d.patch_profile = t.value("patch_profile", std::string("uniform"));  // files before the smooth profile
     d.response_time = t.at("response_time");
     d.response_seconds = t.at("response_seconds");
     d.surface_vertex = j.at("surface").at("vertex").get<std::vector<int>>();
@@ -318,6 +377,7 @@ SurrogateData read_surrogate(const std::string& path, const std::optional<std::s
       if (!(region.radius > 0.0) || !(region.normal.norm() > 0.0))
         throw std::runtime_error("contact_region: expected a radius > 0 and a non-zero normal");
       d.region = region;
+      d.region_field = region_field_from_json(g.at("field"));
     }
     d.report = j.at("report");
     return d;

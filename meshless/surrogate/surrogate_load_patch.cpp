@@ -74,4 +74,39 @@ LoadPatch load_patch(const core::TetMesh& mesh, const Eigen::Vector3d& contact, 
   return p;
 }
 
+double smooth_profile(double distance, double radius) {
+  const double x = distance / radius;
+  return x < 1.0 ? (1.0 - x * x) * (1.0 - x * x) : 0.0;
+}
+
+SmoothLoadPatch smooth_load_patch(const core::TetMesh& mesh, const QuadraturePoints& boundary,
+                                  const Eigen::Vector3d& contact, const Eigen::Vector3d& normal, double radius) {
+  const Eigen::Index nf = mesh.boundary_faces.rows();
+  std::vector<char> side(nf, 0);
+  for (Eigen::Index f = 0; f < nf; ++f) {
+    const Eigen::Vector3d a = mesh.vertices.row(mesh.boundary_faces(f, 0));
+    const Eigen::Vector3d b = mesh.vertices.row(mesh.boundary_faces(f, 1));
+    const Eigen::Vector3d c = mesh.vertices.row(mesh.boundary_faces(f, 2));
+    side[f] = (b - a).cross(c - a).dot(normal) > 0.0;
+  }
+  SmoothLoadPatch p;
+  p.faces.assign(nf, 0);
+  for (int q = 0; q < boundary.size(); ++q) {
+    if (boundary.on_lip(q)) continue;  // the lips of a cut are never loaded (EfgProblem::loaded_faces)
+    const int f = boundary.cells[q];
+    const double w = smooth_profile((boundary.points.row(q).transpose() - contact).norm(), radius);
+    if (w <= 0.0 || !side[f]) continue;
+    if (!p.faces[f]) ++p.num_faces;
+    p.faces[f] = 1;
+    p.profile_integral += boundary.weights[q] * w;
+  }
+  // Every point of a loaded face counts, in the model's quadrature: the profile is 0 at those beyond R.
+  if (p.num_faces == 0)
+    throw std::invalid_argument(fmt::format(
+        "no boundary quadrature point lies within {:.3g} mm of the contact node ({:.4g}, {:.4g}, {:.4g}) mm; "
+        "expected a patch radius larger than the local face size",
+        radius * 1e3, contact.x() * 1e3, contact.y() * 1e3, contact.z() * 1e3));
+  return p;
+}
+
 }  // namespace meshless

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/tet_mesh.hpp"
+#include "meshless/efg/integration_points.hpp"
 
 namespace meshless {
 
@@ -40,5 +41,28 @@ struct LoadPatch {
 /// Throws std::invalid_argument naming the contact point (mm) when no face qualifies.
 LoadPatch load_patch(const core::TetMesh& mesh, const Eigen::Vector3d& contact, const Eigen::Vector3d& normal,
                      double radius);
+
+/// The smooth pressure profile of a training contact: (1 - (r/R)^2)^2 for r < R, 0 beyond. It is C1 at its
+/// edge, so as the contact point moves, faces enter and leave the load continuously and the full model's response
+/// is a continuous function of the contact point, which a contact region interpolates (docs/SURROGATE.md §1).
+double smooth_profile(double distance, double radius);
+/// The smooth profile's radius for a patch radius R0: sqrt(3) R0, so that its integral pi R^2 / 3 is the uniform
+/// patch's area pi R0^2 and its peak pressure the uniform patch's traction (a smaller profile of the same force
+/// concentrates the strain: at R = R0 the lung's 0.4 N tangential training load left the law's range).
+inline double smooth_profile_radius(double patch_radius) { return 1.7320508075688772 * patch_radius; }
+
+/// A smooth patch on a fixed cloud: the boundary faces on the contact node's side (normal . n_contact > 0) that
+/// hold a point of the model's boundary quadrature within `radius`, and the profile's integral over them in that
+/// same quadrature, so that the traction force * profile / integral carries exactly `force` in the model.
+struct SmoothLoadPatch {
+  std::vector<char> faces;        ///< #boundary faces mask (EfgProblem::loaded_faces)
+  double profile_integral = 0.0;  ///< [m^2] sum over the loaded faces' points of w_q * smooth_profile
+  int num_faces = 0;
+};
+
+/// @param boundary the model's boundary quadrature (boundary_quadrature() of its mesh, order and cut)
+/// Throws std::invalid_argument naming the contact point (mm) when no quadrature point lies within `radius`.
+SmoothLoadPatch smooth_load_patch(const core::TetMesh& mesh, const QuadraturePoints& boundary,
+                                  const Eigen::Vector3d& contact, const Eigen::Vector3d& normal, double radius);
 
 }  // namespace meshless

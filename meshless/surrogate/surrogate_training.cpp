@@ -38,16 +38,26 @@ std::string describe(const SurfaceNodes& surface, const PatchLoad& load) {
 }
 
 /// Solve one load on a set-up model: restart from rest under the patch traction, step to the response step.
-SolvedLoad solve_one(EfgModel& model, const SurfaceNodes& surface, const PatchLoad& load,
-                     const PatchSolveOptions& options) {
+SolvedLoad solve_one(EfgModel& model, const SurfaceNodes& surface, const QuadraturePoints& boundary,
+                     const PatchLoad& load, const PatchSolveOptions& options) {
   const auto t0 = std::chrono::steady_clock::now();
   const Eigen::Vector3d x = surface.position.row(load.contact).transpose();
   const Eigen::Vector3d n = surface.normal.row(load.contact).transpose();
-  const LoadPatch patch = load_patch(model.problem().mesh, x, n, options.patch_radius);
-  const Eigen::Vector3d traction = load.force / patch.area;  // uniform: total force / patch area
-  model.restart(patch.faces, [traction](const Eigen::Vector3d&) { return traction; });
   SolvedLoad out;
-  out.patch_area = patch.area;
+  if (options.smooth_profile) {
+    const double radius = smooth_profile_radius(options.patch_radius);
+    const SmoothLoadPatch patch = smooth_load_patch(model.problem().mesh, boundary, x, n, radius);
+    const Eigen::Vector3d scale = load.force / patch.profile_integral;  // the model's quadrature sums to force
+    model.restart(patch.faces, [scale, x, radius](const Eigen::Vector3d& y) {
+      return Eigen::Vector3d(scale * smooth_profile((y - x).norm(), radius));
+    });
+    out.patch_area = patch.profile_integral;
+  } else {
+    const LoadPatch patch = load_patch(model.problem().mesh, x, n, options.patch_radius);
+    const Eigen::Vector3d traction = load.force / patch.area;  // uniform: total force / patch area
+    model.restart(patch.faces, [traction](const Eigen::Vector3d&) { return traction; });
+    out.patch_area = patch.area;
+  }
   for (int step = 1; step <= options.response_step; ++step)
     out.newton_iterations += model.solve_step(step).newton_iterations;
   out.displacement = model.displacements_at(surface.position);  // eq. 7, not the nodal parameters
@@ -108,6 +118,11 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
     }
   };
 
+  // The model's own boundary quadrature, for the smooth profile's integral (read-only, shared by the workers).
+  QuadraturePoints boundary;
+  if (options.smooth_profile)
+    boundary = boundary_quadrature(problem.mesh, problem.quadrature_order, problem.cut ? &*problem.cut : nullptr);
+
   // The first model and the first load, alone: its footprint decides how many models fit the budget.
   const double baseline = resident_bytes();
   auto t0 = std::chrono::steady_clock::now();
@@ -115,7 +130,7 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
   first->setup_system();
   rep.setup_seconds = seconds_since(t0);
   try {
-    results[0] = solve_one(*first, surface, loads[0], options);
+    results[0] = solve_one(*first, surface, boundary, loads[0], options);
   } catch (...) {
     rethrow_with_context(0, std::current_exception());
   }
@@ -145,7 +160,7 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
       }
       for (std::size_t i = next++; i < loads.size() && !failed; i = next++) {
         try {
-          results[i] = solve_one(*model, surface, loads[i], options);
+          results[i] = solve_one(*model, surface, boundary, loads[i], options);
         } catch (...) {
           std::lock_guard<std::mutex> lock(error_mutex);
           if (i < error_index) {
@@ -199,7 +214,9 @@ PatchComparison compare_load_patches(const EfgProblem& problem, const EfgOptions
   model.restart(imprinted, [traction](const Eigen::Vector3d&) { return traction; });
   for (int step = 1; step <= options.response_step; ++step) model.solve_step(step);
   out.imprinted = model.displacements_at(surface.position);
-  const SolvedLoad patch = solve_one(model, surface, load, options);
+  PatchSolveOptions uniform = options;  // the check compares the uniform training patch with the imprinted one
+  uniform.smooth_profile = false;
+  const SolvedLoad patch = solve_one(model, surface, QuadraturePoints{}, load, uniform);
   out.patch = patch.displacement;
   out.patch_area = patch.patch_area;
   const Eigen::Vector3d x = surface.position.row(load.contact).transpose();

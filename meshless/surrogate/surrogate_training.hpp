@@ -28,12 +28,15 @@ struct PatchLoad {
 struct SolvedLoad {
   core::PointMatrix displacement;  ///< #S by 3 [m], u(X_s) at every surface node at the response step
   int newton_iterations = 0;       ///< over the steps solved
-  double patch_area = 0.0;         ///< [m^2]
+  double patch_area = 0.0;         ///< [m^2] the patch's area, or the smooth profile's integral over it
   double seconds = 0.0;            ///< wall time of the time stepping and the interpolation
 };
 
 struct PatchSolveOptions {
   double patch_radius = 0.01;  ///< [m]
+  /// The traction over the patch: uniform on whole faces (load_patch()), or the smooth profile of
+  /// smooth_load_patch(), whose response is continuous in the contact point (a contact region needs it).
+  bool smooth_profile = false;
   int response_step = 1;       ///< 1-based step of problem.step_times at which the displacement is recorded
   /// Total memory the concurrent models may hold [bytes]. The first load is solved alone, and the growth of
   /// the peak resident memory it caused is taken as one model's footprint (tables, matrix and factorisation).
