@@ -64,5 +64,37 @@ TEST(SurrogateBox, HeldOutForcesMatchTheFullModelWithinTwoPercent) {
   }
 }
 
+/// A contact region on the box's top face (docs/SURROGATE.md §4, §6): 5 trained contacts among the 9 top nodes
+/// within 7.5 mm of the centre, and the full model at the 2 untrained nodes, each at the two held-out forces. The
+/// goal is 2 % of the contact-node displacement at untrained contacts; on this small box (the smooth profile's
+/// 10.4 mm radius reaches its sides) 1.90-2.03 % was measured, and 0.65-0.67 % at the trained contacts, where the
+/// region answers each contact's own fit. About 50 s: label long.
+TEST(SurrogateBox, AContactRegionAnswersAtUntrainedContactsNearTwoPercent) {
+  core::SurrogateSpec spec = surrogate_box_spec();
+  spec.contact_region = core::ContactRegionSpec{spec.contact_points.front(), 7.5 * 1e-3, 5, 2, 1};
+  spec.patch_profile = core::SurrogateSpec::PatchProfile::smooth;  // the case reader's default with a region
+  SurrogateBuildReport report;
+  const SurrogateData d = build_surrogate(
+      surrogate_box_problem(), spec, {}, [](const std::string& line) { std::cout << "  " << line << "\n"; },
+      &report);
+  ASSERT_EQ(d.contacts.size(), 5u);
+  ASSERT_TRUE(d.region.has_value());
+  EXPECT_EQ(report.region.region_nodes, 9);
+  int untrained = 0;
+  double worst_untrained = 0.0, worst_trained = 0.0;
+  for (const HoldoutError& e : report.holdouts) {
+    std::cout << (e.trained_contact ? "trained" : "UNTRAINED") << " node " << e.load.contact << ", force ("
+              << e.load.force.transpose() << ") N: RMSE " << e.rmse * 1e3 << " mm = " << 100 * e.relative
+              << " % of the contact-node displacement " << e.contact_displacement * 1e3
+              << " mm; contact-node error " << e.contact_error * 1e3 << " mm\n";
+    (e.trained_contact ? worst_trained : worst_untrained) =
+        std::max(e.trained_contact ? worst_trained : worst_untrained, e.relative);
+    untrained += !e.trained_contact;
+  }
+  EXPECT_EQ(untrained, 4);
+  EXPECT_LE(worst_trained, 0.0075);  // as for one contact (the test above)
+  EXPECT_LE(worst_untrained, 0.0225);  // 2.03 % measured: the interpolation between contacts costs 1.4 points
+}
+
 }  // namespace
 }  // namespace meshless

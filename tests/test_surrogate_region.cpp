@@ -307,7 +307,7 @@ SurrogateData region_surrogate(const SurfaceNodes& s, const RegionContacts& r, s
   return d;
 }
 
-TEST(ContactRegion, AQueryAtATrainedContactHasThatContactsOwnStressedNode) {
+TEST(ContactRegion, AQueryAtATrainedContactIsThatContactsOwnFit) {
   const SurfaceNodes s = sphere_cap();
   const RegionContacts r = select_region_contacts(s, {0, 0, 80 * kMm}, 20 * kMm, 7, 0);
   std::mt19937 rng(3);
@@ -328,6 +328,8 @@ TEST(ContactRegion, AQueryAtATrainedContactHasThatContactsOwnStressedNode) {
     EXPECT_EQ(a.contact_node, b.contact_node);
     EXPECT_LE((a.contact_displacement - b.contact_displacement).norm(), 1e-13 * b.contact_displacement.norm());
     EXPECT_EQ((ur.row(t) - a.contact_displacement.transpose()).norm(), 0.0);
+    // Eq. 28 too: the region's field plus the interpolated corrections is the contact's own fit there.
+    EXPECT_LE((ur - un).cwiseAbs().maxCoeff(), 1e-12 * un.cwiseAbs().maxCoeff());
   }
 }
 

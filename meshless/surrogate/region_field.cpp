@@ -214,21 +214,43 @@ RegionFieldEvaluator::RegionFieldEvaluator(RegionField field, const core::PointM
   for (int i = 0; i < 3; ++i) dent_[i].conservativeResize(dent_[i].rows(), Eigen::NoChange);
 }
 
+int RegionFieldEvaluator::force_columns() const {
+  return field_.axis[0].field_order + field_.axis[1].field_order + field_.axis[2].field_order;
+}
+
 void RegionFieldEvaluator::evaluate(const Eigen::Vector3d& point, const Eigen::Vector3d& force, double* u) const {
+  double powers[3 * kMaxFieldOrder];
+  int n = 0;
+  for (int j = 0; j < 3; ++j) {
+    double power = 1.0;
+    for (int p = 0; p < field_.axis[j].field_order; ++p) powers[n++] = power *= force[j];
+  }
+  evaluate_powers(point, powers, u);
+}
+
+Eigen::MatrixXd RegionFieldEvaluator::nodal_at(const Eigen::Vector3d& point) const {
+  const int columns = force_columns();
+  Eigen::MatrixXd out(3 * position_.rows(), columns);
+  std::vector<double> unit(columns, 0.0);
+  for (int k = 0; k < columns; ++k) {
+    unit[k] = 1.0;
+    evaluate_powers(point, unit.data(), out.col(k).data());
+    unit[k] = 0.0;
+  }
+  return out;
+}
+
+void RegionFieldEvaluator::evaluate_powers(const Eigen::Vector3d& point, const double* powers, double* u) const {
   const int ns = static_cast<int>(position_.rows());
   const int nq = position_monomials(field_.position_order);
   double t[kMaxPositionMonomials];
   position_basis(field_, point, t);
   // The combined force and position monomials sigma_j^p T_q, in the column order of smooth_ and dent_.
   double v_storage[3 * kMaxFieldOrder * kMaxPositionMonomials];
-  int n = 0;
-  for (int j = 0; j < 3; ++j) {
-    double power = 1.0;
-    for (int p = 0; p < field_.axis[j].field_order; ++p) {
-      power *= force[j];
-      for (int q = 0; q < nq; ++q) v_storage[n++] = power * t[q];
-    }
-  }
+  int n = 0, k = 0;
+  for (int j = 0; j < 3; ++j)
+    for (int p = 0; p < field_.axis[j].field_order; ++p, ++k)
+      for (int q = 0; q < nq; ++q) v_storage[n++] = powers[k] * t[q];
   const Eigen::Map<const Eigen::VectorXd> v(v_storage, n);
   Eigen::Map<Eigen::VectorXd> out(u, 3 * ns);
   out.noalias() = smooth_ * v;

@@ -70,8 +70,16 @@ class RegionFieldEvaluator {
   /// u at every surface node for a probe at `point` [m] with `force` [N] (each component within the trained
   /// range), into `u` (3 #S values, node s component i at 3 s + i) [m].
   void evaluate(const Eigen::Vector3d& point, const Eigen::Vector3d& force, double* u) const;
+  /// The field at a fixed probe point as per-node force polynomials: 3 #S by columns(), column (j, m) (axes in
+  /// order, m = 1..lambda'_j) the coefficient of sigma_j^m [m / N^m]. Not for the real-time loop (it allocates).
+  Eigen::MatrixXd nodal_at(const Eigen::Vector3d& point) const;
+  /// Number of force powers: sum over axes of lambda'.
+  int force_columns() const;
 
  private:
+  /// The field for force powers `powers` (force_columns() values, sigma_j^m in the order of nodal_at()).
+  void evaluate_powers(const Eigen::Vector3d& point, const double* powers, double* u) const;
+
   RegionField field_;
   core::PointMatrix position_;
   int columns_ = 0;         ///< sum over axes of lambda' * #position monomials

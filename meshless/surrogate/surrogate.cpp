@@ -67,6 +67,21 @@ Surrogate::Surrogate(SurrogateData data, double contact_tolerance) : data_(std::
   for (const ContactFit& c : data_.contacts) positions.push_back(data_.surface_position.row(c.contact).transpose());
   interpolation_.emplace(*data_.region, positions);
   region_field_.emplace(*data_.region_field, data_.surface_position);
+  // The correction of each trained contact: its own fit minus the region's field there, both as per-node force
+  // polynomials in the region's column layout (a contact's own lambda' is at most the region's).
+  for (int c = 0; c < num_contacts(); ++c) {
+    Eigen::MatrixXd own = Eigen::MatrixXd::Zero(3 * num_surface_nodes(), region_field_->force_columns());
+    int from = 0, to = 0;
+    for (int j = 0; j < 3; ++j) {
+      const int order = data_.contacts[c].axis[j].field_order;
+      if (order > data_.region_field->axis[j].field_order)
+        throw std::invalid_argument("Surrogate: a contact's field order exceeds its region's");
+      own.middleCols(to, order) = nodal_[c].middleCols(from, order);
+      from += order;
+      to += data_.region_field->axis[j].field_order;
+    }
+    correction_.push_back(own - region_field_->nodal_at(positions[c]));
+  }
 }
 
 SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Vector3d& force,
@@ -130,7 +145,20 @@ void Surrogate::interpolate_in_region(const Eigen::Vector3d& point, SurrogateRes
     double field_powers[3 * kMaxOrder];
     force_powers(data_.contacts[c], r->force, &r->contact_displacement, field_powers, weight[c]);
   }
-  region_field_->evaluate(point, r->force, surface->data());  // row-major #S by 3
+  // Eq. 28: the region's field at the probe, plus the trained contacts' corrections interpolated in place (so a
+  // query at a trained contact is that contact's own fit; between contacts the corrections are the region fit's
+  // smooth misfit, blended).
+  Eigen::Map<Eigen::VectorXd> u(surface->data(), 3 * ns);  // row-major #S by 3
+  region_field_->evaluate(point, r->force, u.data());
+  double powers[3 * kMaxOrder];
+  int n = 0;
+  for (int j = 0; j < 3; ++j) {
+    double power = 1.0;
+    for (int p = 0; p < data_.region_field->axis[j].field_order; ++p) powers[n++] = power *= r->force[j];
+  }
+  const Eigen::Map<const Eigen::VectorXd> sigma(powers, n);
+  for (int c = 0; c < nc; ++c)
+    if (weight[c] != 0.0) u.noalias() += weight[c] * (correction_[c] * sigma);
 
   double nearest = std::numeric_limits<double>::infinity();
   for (int s = 0; s < ns; ++s) {

@@ -88,9 +88,13 @@ class Surrogate {
   double tolerance_ = 0.0;
   std::vector<Eigen::MatrixXd>
       nodal_;  ///< per contact: 3S by sum_j lambda_j, columns sigma_x^1.., sigma_y^1..
-  // With a contact region: eqs. 25-27 interpolated, eq. 28 as one field of the position.
+  // With a contact region: eqs. 25-27 interpolated, eq. 28 as one field of the position plus the interpolated
+  // corrections that make it each trained contact's own fit at that contact.
   std::optional<ContactInterpolation> interpolation_;
   std::optional<RegionFieldEvaluator> region_field_;
+  /// Per trained contact: its own eq. 28 (nodal_) minus the region's field at its node, 3S by the region's force
+  /// columns (sigma_j^m, m = 1..lambda'_j of the region).
+  std::vector<Eigen::MatrixXd> correction_;
 };
 
 }  // namespace meshless
