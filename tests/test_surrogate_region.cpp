@@ -193,13 +193,16 @@ RegionField random_region_field(const SurfaceNodes& s, const ContactRegion& g, i
   r.frame = SurfaceFrame::at(g.centre, g.normal, length, contact_length);
   r.radius = g.radius;
   r.position_order = position_order;
-  for (RegionAxisField& a : r.axis) {
+  for (int j = 0; j < 3; ++j) {
+    RegionAxisField& a = r.axis[j];
     a.field_order = 2;
     for (InducedFieldFit& f : a.field) {
+      // The axes' contact orders differ (0, 1, 2), as fitted ones do: a component's contact terms then have as
+      // many rows as its largest order, zero for the axes with fewer.
       f.tangential_order = 2;
       f.normal_order = 1;
-      f.contact_order = 2;
-      const SpatialBasis basis(2, 1, 2, contact_length / length);
+      f.contact_order = j;
+      const SpatialBasis basis(2, 1, j, contact_length / length);
       f.coefficients = Eigen::MatrixXd::NullaryExpr(basis.size() * position_monomials(position_order), 2,
                                                     [&] { return 1e-3 * normal(rng); });
     }
@@ -270,7 +273,8 @@ TEST(ContactRegion, TheDentIsCentredOnTheQueryPoint) {
   RegionField field = random_region_field(s, g, 0, rng, 20 * kMm);
   for (RegionAxisField& a : field.axis)
     for (InducedFieldFit& f : a.field) {
-      const SpatialBasis basis(2, 1, 2, field.frame.contact_length / field.frame.length);
+      const SpatialBasis basis(f.tangential_order, f.normal_order, f.contact_order,
+                               field.frame.contact_length / field.frame.length);
       for (int k = 0; k < basis.size(); ++k)
         if (basis.terms()[k].m == 0) f.coefficients.row(k).setZero();
     }

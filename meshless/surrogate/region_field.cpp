@@ -184,7 +184,13 @@ RegionFieldEvaluator::RegionFieldEvaluator(RegionField field, const core::PointM
   }
   if (10 * contact_order_ > kMaxContactTerms) throw std::invalid_argument("RegionFieldEvaluator: contact order above 6");
   smooth_ = Eigen::MatrixXd::Zero(3 * ns, columns_);
-  for (int i = 0; i < 3; ++i) dent_[i] = Eigen::MatrixXd::Zero(0, columns_);
+  // Each component's contact terms: as many rows as its largest contact order over the axes has (10 per order),
+  // zero where an axis has fewer.
+  for (int i = 0; i < 3; ++i) {
+    int order = 0;
+    for (const RegionAxisField& a : field_.axis) order = std::max(order, a.field[i].contact_order);
+    dent_[i] = Eigen::MatrixXd::Zero(10 * order, columns_);
+  }
   int offset = 0;  // first column of the axis
   for (const RegionAxisField& a : field_.axis) {
     for (int i = 0; i < 3; ++i) {
@@ -193,7 +199,6 @@ RegionFieldEvaluator::RegionFieldEvaluator(RegionField field, const core::PointM
       int polynomial_terms = 0;
       for (const BasisTerm& term : basis.terms()) polynomial_terms += term.m == 0;
       const int contact_terms = basis.size() - polynomial_terms;
-      if (dent_[i].rows() < contact_terms) dent_[i].conservativeResize(contact_terms, Eigen::NoChange);
       // The contact terms come after the polynomial ones, by m then degree (surrogate_basis.hpp).
       for (int term = 0; term < contact_terms; ++term)
         for (int p = 0; p < a.field_order; ++p)
@@ -211,7 +216,6 @@ RegionFieldEvaluator::RegionFieldEvaluator(RegionField field, const core::PointM
     }
     offset += a.field_order * nq;
   }
-  for (int i = 0; i < 3; ++i) dent_[i].conservativeResize(dent_[i].rows(), Eigen::NoChange);
 }
 
 int RegionFieldEvaluator::force_columns() const {
