@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -92,6 +93,12 @@ void print_fit(const meshless::SurrogateData& d, const meshless::SurrogateBuildR
         e.load.force.x(), e.load.force.y(), e.load.force.z(), e.trained_contact ? "trained" : "UNTRAINED region",
         x.x(), x.y(), x.z(), e.rmse * 1e3, 100 * e.relative, e.contact_displacement * 1e3,
         100 * e.rmse / r.peak_contact_displacement, e.contact_error * 1e3);
+    if (!std::isnan(e.rmse_near_cut))
+      std::cout << fmt::format(
+          "  on the cut body: RMSE {:.4g} mm = {:.2f} % near the lips (surface nodes within {:.3g} mm of the cut), "
+          "{:.4g} mm = {:.2f} % away from them\n",
+          e.rmse_near_cut * 1e3, 100 * e.rmse_near_cut / e.contact_displacement, r.near_cut_distance * 1e3,
+          e.rmse_away_from_cut * 1e3, 100 * e.rmse_away_from_cut / e.contact_displacement);
     if (!e.trained_contact) worst_untrained = std::max(worst_untrained, e.relative);
   }
   if (worst_untrained >= 0.0)

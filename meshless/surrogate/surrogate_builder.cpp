@@ -65,7 +65,7 @@ std::vector<PatchLoad> region_holdout_loads(const core::SurrogateSpec& spec, con
 }
 
 std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::vector<PatchLoad>& loads,
-                                         const std::vector<SolvedLoad>& full) {
+                                         const std::vector<SolvedLoad>& full, const std::vector<char>* near_cut) {
   if (loads.size() != full.size())
     throw std::invalid_argument("holdout_errors: one full solve per load expected");
   std::vector<HoldoutError> out;
@@ -82,6 +82,22 @@ std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::
     e.contact_displacement = f.row(loads[i].contact).norm();
     e.relative = e.contact_displacement > 0.0 ? e.rmse / e.contact_displacement : 0.0;
     e.contact_error = (r.contact_displacement - f.row(loads[i].contact).transpose()).norm();
+    if (near_cut) {
+      double near = 0.0, away = 0.0;
+      int n_near = 0, n_away = 0;
+      for (Eigen::Index k = 0; k < u.rows(); ++k) {
+        const double e2 = (u.row(k) - f.row(k)).squaredNorm();
+        if ((*near_cut)[k]) {
+          near += e2;
+          ++n_near;
+        } else {
+          away += e2;
+          ++n_away;
+        }
+      }
+      if (n_near) e.rmse_near_cut = std::sqrt(near / n_near);
+      if (n_away) e.rmse_away_from_cut = std::sqrt(away / n_away);
+    }
     e.trained_contact = false;
     for (const ContactFit& c : surrogate.data().contacts) e.trained_contact |= c.contact == loads[i].contact;
     out.push_back(e);
@@ -217,7 +233,14 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
         },
         &rep.holdout);
     const Surrogate surrogate(d);
-    rep.holdouts = holdout_errors(surrogate, holdout, full);
+    // On a cut body, the error near the lips (within one node spacing of the cut) and away from them.
+    std::vector<char> near_cut;
+    if (problem.cut) {
+      rep.near_cut_distance = problem.node_spacing;
+      for (int k = 0; k < surface.size(); ++k)
+        near_cut.push_back(problem.cut->distance(surface.position.row(k).transpose()) <= rep.near_cut_distance);
+    }
+    rep.holdouts = holdout_errors(surrogate, holdout, full, problem.cut ? &near_cut : nullptr);
     rep.holdout_loads = holdout;
     rep.holdout_solves = full;
   }
@@ -233,7 +256,10 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
          {"rmse_relative_to_contact_displacement", e.relative},
          {"rmse_relative_to_peak_contact_displacement", e.rmse / rep.peak_contact_displacement},
          {"contact_error_m", e.contact_error},
-         {"trained_contact", e.trained_contact}});
+         {"trained_contact", e.trained_contact},
+         {"rmse_near_cut_m", std::isnan(e.rmse_near_cut) ? nlohmann::json() : nlohmann::json(e.rmse_near_cut)},
+         {"rmse_away_from_cut_m",
+          std::isnan(e.rmse_away_from_cut) ? nlohmann::json() : nlohmann::json(e.rmse_away_from_cut)}});
   std::vector<double> snap_mm;
   for (double s : rep.snap_distance) snap_mm.push_back(s * 1e3);
   d.report = {{"training",

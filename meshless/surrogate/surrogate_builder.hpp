@@ -6,6 +6,7 @@
 //   3. fit eqs. 25-28 with cross-validated orders (surrogate_fit);
 //   4. solve held-out forces that were not trained on and compare the surrogate with them.
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,10 @@ struct HoldoutError {
   double relative = 0.0;              ///< rmse / contact_displacement
   double contact_error = 0.0;         ///< [m] |u_surrogate - u_full| at the contact node
   bool trained_contact = true;  ///< false: an untrained node of the contact region (the interpolation's error)
+  /// On a cut body: the same RMSE over the surface nodes within one node spacing of the cut (its lips) and over
+  /// the others [m]; NaN without a cut.
+  double rmse_near_cut = std::numeric_limits<double>::quiet_NaN();
+  double rmse_away_from_cut = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct SurrogateBuildOptions {
@@ -50,6 +55,7 @@ struct SurrogateBuildOptions {
 struct SurrogateBuildReport {
   std::vector<double> snap_distance;  ///< [m] per contact point, to its surface node (a region: its centre)
   RegionContacts region;              ///< the contact region's nodes (empty without a region)
+  double near_cut_distance = 0.0;     ///< [m] on a cut body: "near the lips" means within this of the cut
   PatchSolveReport training, holdout;
   int training_solves = 0;
   double fit_seconds = 0.0;
@@ -69,7 +75,9 @@ SurrogateData build_surrogate(const EfgProblem& problem, const core::SurrogateSp
                               SurrogateBuildReport* report = nullptr);
 
 /// Compare the surrogate with full solves (eq. 34 RMSE over the surface nodes, per load).
+/// `near_cut` (may be null): #S mask of the surface nodes near a cut, for HoldoutError::rmse_near_cut.
 std::vector<HoldoutError> holdout_errors(const Surrogate& surrogate, const std::vector<PatchLoad>& loads,
-                                         const std::vector<SolvedLoad>& full);
+                                         const std::vector<SolvedLoad>& full,
+                                         const std::vector<char>* near_cut = nullptr);
 
 }  // namespace meshless
