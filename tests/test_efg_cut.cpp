@@ -14,6 +14,7 @@
 #include <set>
 
 #include "meshless/verification/box_mesh.hpp"
+#include "tests/cut_cloud.hpp"
 #include "meshless/cut/cut_quadrature.hpp"
 #include "meshless/cut/cut_weights.hpp"
 #include "meshless/efg/efg_model.hpp"
@@ -26,39 +27,12 @@
 namespace meshless {
 namespace {
 
-constexpr double kEdge = 0.1;     // [m] the box
+constexpr double kEdge = test::kCutBoxEdge;  // [m] the box
 constexpr double kSpacing = 0.01;  // [m] node spacing
 constexpr double kTransition = 0.01;  // [m] the front transition l
 
-// A kinked incision from the top face z = 0.1 down 30 mm, three panels (turns of about 35 and 50 degrees).
-core::RuledSurface kinked_cut() {
-  return core::RuledSurface({Eigen::Vector3d(0.02, 0.05, 0.1), Eigen::Vector3d(0.045, 0.035, 0.1),
-                             Eigen::Vector3d(0.07, 0.045, 0.1), Eigen::Vector3d(0.085, 0.07, 0.1)},
-                            -Eigen::Vector3d::UnitZ(), 0.03);
-}
-
-/// MLS over a jittered 11^3 box cloud with the cut's weights installed.
-struct CutCloud {
-  core::TetMesh mesh;
-  std::unique_ptr<NodeSearch> search;
-  std::unique_ptr<SupportRadii> radii;
-  std::unique_ptr<MlsShapeFunctions> mls;
-  std::unique_ptr<CutWeights> weights;
-
-  CutCloud(CutTreatment treatment, double transition) {
-    mesh = make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(kEdge), 10, 10, 10, {}, 0.2, 17);
-    search = std::make_unique<NodeSearch>(mesh.vertices);
-    SupportRadiiParams p;
-    p.d_max = 2.0;
-    p.k = 6;
-    radii = std::make_unique<SupportRadii>(mesh.vertices, *search, p);
-    mls = std::make_unique<MlsShapeFunctions>(mesh.vertices, *radii, *search);
-    weights = std::make_unique<CutWeights>(kinked_cut(), mesh.vertices, radii->radii(), treatment, transition);
-    const CutWeights* w = weights.get();
-    mls->set_weight_modifier([w](int i, const Eigen::Vector3d& x, int side, Eigen::Vector3d* g) { return (*w)(i, x, side, g); });
-  }
-  Eigen::Vector3d node(int i) const { return mesh.vertices.row(i).transpose(); }
-};
+using test::CutCloud;
+using test::kinked_cut;
 
 struct Consistency {
   double partition = 0, reproduction = 0, gradient_sum = 0, gradient_reproduction = 0;
