@@ -15,16 +15,6 @@ constexpr int kMaxFieldOrder = 8;        // lambda' (SurrogateFitOptions::IsVali
 constexpr int kMaxPositionMonomials = 6;  // position_order <= 2
 constexpr int kMaxContactTerms = 60;      // 10 per contact order, c <= 6
 
-/// L by order matrix of s_l^p, p = 1..order.
-Eigen::MatrixXd powers_of(const std::vector<double>& s, int order) {
-  Eigen::MatrixXd v(s.size(), order);
-  for (std::size_t l = 0; l < s.size(); ++l) {
-    double power = s[l];
-    for (int p = 0; p < order; ++p, power *= s[l]) v(l, p) = power;
-  }
-  return v;
-}
-
 SpatialBasis basis_of(const InducedFieldFit& f, const SurfaceFrame& frame) {
   return SpatialBasis(f.tangential_order, f.normal_order, f.contact_order, frame.contact_length / frame.length);
 }
@@ -128,9 +118,9 @@ RegionField fit_region_field(const SurfaceNodes& surface, const ContactRegion& r
       for (const core::PointMatrix& u : d.displacement[j]) u_scale = std::max(u_scale, u.cwiseAbs().maxCoeff());
     if (!(u_scale > 0.0)) u_scale = 1.0;
     // Stage 1 as in fit_contact(): every node's least-squares force polynomial, per contact.
-    const Eigen::MatrixXd v = powers_of(s, axis.field_order);
+    const Eigen::MatrixXd v = force_powers(s, axis.field_order);
     const ScaledLeastSquares vls(v, options.rank_threshold);
-    const Eigen::MatrixXd sigma_powers = powers_of(levels, axis.field_order);  // sigma in N
+    const Eigen::MatrixXd sigma_powers = force_powers(levels, axis.field_order);  // sigma in N
     for (int i = 0; i < 3; ++i) {
       InducedFieldFit& field = axis.field[i];
       field.tangential_order = shape[j].field[i].tangential_order;

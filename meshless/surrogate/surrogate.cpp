@@ -11,7 +11,7 @@ constexpr int kMaxOrder = 8;  // largest force order a surrogate may hold (Surro
 constexpr int kMaxRegionContacts = 64;  // core::ContactRegionSpec::training_contacts is at most 64
 /// The force powers of one contact: adds `weight` times its eqs. 25-27 (the three axes superposed) to
 /// `contact_displacement`, and writes sigma_j^p in the column order of nodal_ into `field_powers` (3 * kMaxOrder).
-Eigen::Map<const Eigen::VectorXd> force_powers(const ContactFit& fit, const Eigen::Vector3d& force,
+Eigen::Map<const Eigen::VectorXd> contact_response_and_powers(const ContactFit& fit, const Eigen::Vector3d& force,
                                                Eigen::Vector3d* contact_displacement, double* field_powers,
                                                double weight = 1.0) {
   double power[3][kMaxOrder];  // sigma_j^p, p = 1..8
@@ -118,7 +118,7 @@ SurrogateResponse Surrogate::query(const Eigen::Vector3d& point, const Eigen::Ve
     // Eqs. 25-27 at the contact node, the three axes superposed; eq. 28 at every surface node: one
     // matrix-vector product.
     double field_powers[3 * kMaxOrder];
-    const Eigen::Map<const Eigen::VectorXd> sigma = force_powers(fit, r.force, &r.contact_displacement, field_powers);
+    const Eigen::Map<const Eigen::VectorXd> sigma = contact_response_and_powers(fit, r.force, &r.contact_displacement, field_powers);
     Eigen::Map<Eigen::VectorXd> u(surface->data(), 3 * ns);  // row-major #S by 3: node s, component i at 3s + i
     u.noalias() = nodal_[r.contact] * sigma;
     surface->row(r.contact_node) = r.contact_displacement.transpose();  // the stressed node follows eqs. 25-27
@@ -143,7 +143,7 @@ void Surrogate::interpolate_in_region(const Eigen::Vector3d& point, SurrogateRes
   r->contact_displacement.setZero();
   for (int c = 0; c < nc; ++c) {
     double field_powers[3 * kMaxOrder];
-    force_powers(data_.contacts[c], r->force, &r->contact_displacement, field_powers, weight[c]);
+    contact_response_and_powers(data_.contacts[c], r->force, &r->contact_displacement, field_powers, weight[c]);
   }
   // Eq. 28: the region's field at the probe, plus the trained contacts' corrections interpolated in place (so a
   // query at a trained contact is that contact's own fit; between contacts the corrections are the region fit's

@@ -109,15 +109,6 @@ std::size_t most_parsimonious(const std::vector<CvScore>& scores, double data_sc
   return 0;
 }
 
-/// L by order matrix of s_l^p, p = 1..order (no constant: u(0) = 0).
-Eigen::MatrixXd force_powers(const std::vector<double>& s, int order) {
-  Eigen::MatrixXd v(s.size(), order);
-  for (std::size_t l = 0; l < s.size(); ++l) {
-    double power = s[l];
-    for (int p = 0; p < order; ++p, power *= s[l]) v(l, p) = power;
-  }
-  return v;
-}
 
 /// Deterministic partition of n items into k folds: a seeded Fisher-Yates permutation dealt round-robin.
 std::vector<int> node_folds(int n, int k, unsigned seed) {
@@ -428,6 +419,15 @@ ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& d
     axis.training_rms = std::sqrt(reconstructed_sq.sum() / (static_cast<double>(ns) * nl));
   }
   return out;
+}
+
+Eigen::MatrixXd force_powers(const std::vector<double>& s, int order) {
+  Eigen::MatrixXd v(s.size(), order);
+  for (std::size_t l = 0; l < s.size(); ++l) {
+    double power = s[l];
+    for (int p = 0; p < order; ++p, power *= s[l]) v(l, p) = power;
+  }
+  return v;
 }
 
 Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame,

@@ -136,6 +136,9 @@ struct ContactFit {
 ContactFit fit_contact(const SurfaceNodes& surface, const ContactTrainingData& data, double max_force,
                        const SurrogateFitOptions& options);
 
+/// L by order matrix of s_l^p, p = 1..order: the force powers of eqs. 25-28 (no constant: u(0) = 0).
+Eigen::MatrixXd force_powers(const std::vector<double>& s, int order);
+
 /// The surrogate's surface nodes' per-node force polynomials of one axis (the eq. 28 functions evaluated at
 /// the nodes): #S*3 by the axis' field_order, row 3s+i = component i of node s [m / N^p].
 Eigen::MatrixXd nodal_coefficients(const SurfaceNodes& surface, const SurfaceFrame& frame,
