@@ -17,6 +17,7 @@
 #include "experiments/compare_metrics.hpp"
 #include "experiments/compare_subprocess.hpp"
 #include "experiments/mesh_study_estimate.hpp"
+#include "tests/tissue_process.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -25,19 +26,8 @@ using experiments::MeshStudyEstimate;
 
 namespace {
 
-struct RunResult {
-  int exit_code;
-  std::string output;
-};
-
-RunResult run(const std::string& args) {
-  FILE* pipe = popen((std::string(TISSUE_BINARY) + " " + args + " 2>&1").c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer{};
-  while (pipe && fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pipe ? pclose(pipe) : -1;
-  return {WEXITSTATUS(status), output};
-}
+using RunResult = tissue_test::TissueRun;
+RunResult run(const std::string& args) { return tissue_test::run_tissue(args); }
 
 fs::path temp_dir(const std::string& tag) {
   const fs::path d = fs::temp_directory_path() / ("tissue_compare_" + tag + "_" + std::to_string(::getpid()));

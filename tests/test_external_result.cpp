@@ -17,6 +17,7 @@
 #include "experiments/compare.hpp"
 #include "experiments/external_result.hpp"
 #include "experiments/model_result.hpp"
+#include "tests/tissue_process.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -326,19 +327,8 @@ TEST_F(ExternalResult, RefusesABadName) {
 
 // The command refuses a bad file before any solve and leaves nothing behind: the count right after reading the case,
 // the positions right after the geometry (seconds on the CI lung).
-struct CommandOutcome {
-  int exit_code;
-  std::string output;
-};
-
-CommandOutcome run_tissue(const std::string& args) {
-  FILE* pipe = popen((std::string(TISSUE_BINARY) + " " + args + " 2>&1").c_str(), "r");
-  std::string output;
-  std::array<char, 4096> buffer{};
-  while (pipe && fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
-  const int status = pipe ? pclose(pipe) : -1;
-  return {WEXITSTATUS(status), output};
-}
+using CommandOutcome = tissue_test::TissueRun;
+using tissue_test::run_tissue;
 
 TEST_F(ExternalResult, CompareRefusesABadFileBeforeAnySolve) {
   const std::string config = std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json";  // 10 samples
