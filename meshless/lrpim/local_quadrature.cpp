@@ -1,8 +1,12 @@
 #include "meshless/lrpim/local_quadrature.hpp"
 
+#include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include "core/surface_query.hpp"
+#include "meshless/efg/gauss_quadrature_tet.hpp"
 #include "meshless/mls/cubic_spline_weight.hpp"
 
 namespace meshless::lrpim {
@@ -52,25 +56,28 @@ LocalPoint test_point(const Eigen::Vector3d& centre, double r_q, const Eigen::Ve
   return p;
 }
 
-}  // namespace
-
-std::vector<LocalPoint> sphere_points(const Eigen::Vector3d& centre, double r_q, const BoxBody& body,
-                                      const LocalQuadratureRule& rule) {
+// The sphere rule over whatever pieces of each ray lie inside: segments(dir, pieces) fills the pieces within r_q.
+template <class Segments>
+std::vector<LocalPoint> sphere_points_of(const Eigen::Vector3d& centre, double r_q, const LocalQuadratureRule& rule,
+                                         const Segments& segments) {
   std::vector<double> mx, mw, rx, rw;
   gauss_legendre(rule.polar, &mx, &mw);
   gauss_legendre(rule.radial, &rx, &rw);
   std::vector<LocalPoint> out;
   std::vector<std::pair<double, double>> radii;
-  const double dphi = 2.0 * M_PI / rule.azimuthal;
+  std::vector<RaySegment> pieces;
+  const double dphi = 2.0 * M_PI / rule.azimuthal, r_half = 0.5 * r_q;
   for (int a = 0; a < rule.polar; ++a) {
     const double mu = mx[a], st = std::sqrt(std::max(0.0, 1.0 - mu * mu));
     for (int b = 0; b < rule.azimuthal; ++b) {
       const double phi = (b + 0.5) * dphi;
       const Eigen::Vector3d dir(st * std::cos(phi), st * std::sin(phi), mu);
-      const double reach = std::min(r_q, body.exit_distance(centre, dir));
+      segments(dir, &pieces);
       radii.clear();
-      segment(0.0, std::min(reach, 0.5 * r_q), rx, rw, &radii);
-      segment(0.5 * r_q, reach, rx, rw, &radii);
+      for (const RaySegment& s : pieces) {
+        segment(s.begin, std::min(s.end, r_half), rx, rw, &radii);
+        segment(std::max(s.begin, r_half), s.end, rx, rw, &radii);
+      }
       for (const auto& [r, w] : radii)
         out.push_back(test_point(centre, r_q, centre + r * dir, mw[a] * dphi * w * r * r));
     }
@@ -78,33 +85,55 @@ std::vector<LocalPoint> sphere_points(const Eigen::Vector3d& centre, double r_q,
   return out;
 }
 
-std::vector<LocalPoint> face_points(const Eigen::Vector3d& centre, double r_q, const BoxBody& body, int face,
-                                    const LocalQuadratureRule& rule) {
-  const int ax = BoxBody::axis(face);
-  const double delta = std::abs(centre[ax] - body.plane(face));
+}  // namespace
+
+std::vector<LocalPoint> sphere_points(const Eigen::Vector3d& centre, double r_q, const LocalSurface& surface,
+                                      const LocalQuadratureRule& rule) {
+  return sphere_points_of(centre, r_q, rule, [&](const Eigen::Vector3d& dir, std::vector<RaySegment>* pieces) {
+    surface.ray_segments(dir, r_q, pieces);
+  });
+}
+
+std::vector<LocalPoint> sphere_points(const Eigen::Vector3d& centre, double r_q, const BoxBody& body,
+                                      const LocalQuadratureRule& rule) {
+  return sphere_points_of(centre, r_q, rule, [&](const Eigen::Vector3d& dir, std::vector<RaySegment>* pieces) {
+    pieces->clear();
+    const double reach = std::min(r_q, body.exit_distance(centre, dir));
+    if (reach > 0.0) pieces->push_back({0.0, reach});
+  });
+}
+
+std::vector<LocalPoint> triangle_points(const Eigen::Vector3d& centre, double r_q, const Eigen::Vector3d& a,
+                                        const Eigen::Vector3d& b, const Eigen::Vector3d& c,
+                                        const LocalQuadratureRule& rule) {
   std::vector<LocalPoint> out;
-  if (delta >= r_q) return out;
-  Eigen::Vector3d foot = centre;
-  foot[ax] = body.plane(face);
-  const double rho_max = std::sqrt(r_q * r_q - delta * delta);
-  // The spline's pieces meet at |X - X_i| = r_q / 2, i.e. at rho_k in the plane (when the plane is that close).
-  const double rho_k = delta < 0.5 * r_q ? std::sqrt(0.25 * r_q * r_q - delta * delta) : 0.0;
-  std::vector<double> rx, rw;
-  gauss_legendre(rule.radial, &rx, &rw);
-  const Eigen::Vector3d e1 = Eigen::Vector3d::Unit((ax + 1) % 3), e2 = Eigen::Vector3d::Unit((ax + 2) % 3);
-  const double dpsi = 2.0 * M_PI / rule.azimuthal;
-  std::vector<std::pair<double, double>> radii;
-  for (int b = 0; b < rule.azimuthal; ++b) {
-    const double psi = (b + 0.5) * dpsi;
-    const Eigen::Vector3d dir = std::cos(psi) * e1 + std::sin(psi) * e2;
-    const double reach = std::min(rho_max, body.exit_distance_in_face(face, foot, dir));
-    radii.clear();
-    segment(0.0, std::min(reach, rho_k), rx, rw, &radii);
-    segment(rho_k, reach, rx, rw, &radii);
-    for (const auto& [rho, w] : radii) {
-      LocalPoint p = test_point(centre, r_q, foot + rho * dir, dpsi * w * rho);
-      p.dv.setZero();
-      out.push_back(p);
+  if ((core::closest_point_on_triangle(centre, a, b, c) - centre).norm() >= r_q) return out;
+  const SimplexRule tri = triangle_rule(rule.boundary_order);
+  const double max_edge = rule.boundary_subdivision * r_q;
+  struct Piece {
+    Eigen::Vector3d a, b, c;
+  };
+  std::vector<Piece> stack = {{a, b, c}};
+  while (!stack.empty()) {
+    const Piece p = stack.back();
+    stack.pop_back();
+    if ((core::closest_point_on_triangle(centre, p.a, p.b, p.c) - centre).norm() >= r_q) continue;
+    const double longest = std::max({(p.b - p.a).norm(), (p.c - p.b).norm(), (p.a - p.c).norm()});
+    if (longest > max_edge) {
+      const Eigen::Vector3d ab = 0.5 * (p.a + p.b), bc = 0.5 * (p.b + p.c), ca = 0.5 * (p.c + p.a);
+      stack.push_back({p.a, ab, ca});
+      stack.push_back({ab, p.b, bc});
+      stack.push_back({ca, bc, p.c});
+      stack.push_back({ab, bc, ca});
+      continue;
+    }
+    const double twice_area = (p.b - p.a).cross(p.c - p.a).norm();
+    for (int q = 0; q < tri.size(); ++q) {
+      const Eigen::Vector3d x = p.a + tri.points[q].x() * (p.b - p.a) + tri.points[q].y() * (p.c - p.a);
+      LocalPoint lp = test_point(centre, r_q, x, tri.weights[q] * twice_area);
+      if (!(lp.v > 0.0)) continue;
+      lp.dv.setZero();
+      out.push_back(lp);
     }
   }
   return out;

@@ -1,10 +1,16 @@
 #include "meshless/lrpim/lrpim_model.hpp"
 
 #include <Eigen/SparseLU>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <exception>
+#include <iterator>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+
+#include "meshless/solvers/mumps_lu.hpp"
 
 namespace meshless::lrpim {
 
@@ -27,6 +33,40 @@ Eigen::Matrix<double, 6, 3> b_block(const Eigen::Vector3d& g) {
 
 }  // namespace
 
+// The factorisation of the last tangent: MUMPS (row-major matrix as assembled) or Eigen's SparseLU (a column-major
+// copy), chosen by LrpimProblem::linear_solver.
+struct LrpimModel::Solver {
+  LrpimLinearSolver kind;
+  std::unique_ptr<MumpsLu> mumps;
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+  bool analysed = false, factored = false;
+  std::string name;
+
+  void factorise(const LrpimMatrix& k) {
+    if (kind == LrpimLinearSolver::mumps) {
+      if (!mumps) mumps = std::make_unique<MumpsLu>(name);
+      mumps->factorise(k);
+    } else {
+      Eigen::SparseMatrix<double> c = k;
+      c.makeCompressed();
+      if (!analysed) lu.analyzePattern(c), analysed = true;
+      lu.factorize(c);
+      if (lu.info() != Eigen::Success)
+        throw std::runtime_error("LrpimModel '" + name + "': the tangent is singular (SparseLU: " +
+                                 lu.lastErrorMessage() + "); check that the body is held (a displacement face or an "
+                                 "elastic support)");
+    }
+    factored = true;
+  }
+  Eigen::VectorXd solve(const Eigen::VectorXd& r) {
+    Eigen::VectorXd x = kind == LrpimLinearSolver::mumps ? mumps->solve(r) : Eigen::VectorXd(lu.solve(r));
+    if (!x.allFinite()) throw std::runtime_error("LrpimModel '" + name + "': the linear solve gave non-finite values");
+    return x;
+  }
+};
+
+LrpimModel::~LrpimModel() = default;
+
 LrpimModel::LrpimModel(LrpimProblem problem)
     : problem_(std::move(problem)),
       search_(problem_.nodes),
@@ -38,33 +78,38 @@ LrpimModel::LrpimModel(LrpimProblem problem)
     throw std::invalid_argument("LrpimModel: fewer nodes than RpimParameters::num_neighbours");
   if (!(problem_.alpha_q > 0.0)) throw std::invalid_argument("LrpimModel: alpha_q must be > 0");
   if (problem_.step_times.empty()) throw std::invalid_argument("LrpimModel: no step times");
-  bool has_displacement = false;
-  for (int f = 0; f < kBoxFaces; ++f) {
-    if (problem_.faces[f] == FaceCondition::displacement) has_displacement = true;
-    if (problem_.faces[f] == FaceCondition::traction && !problem_.traction)
+  if (!problem_.body) throw std::invalid_argument("LrpimModel: LrpimProblem::body is not set");
+  const SurfaceBody& body = *problem_.body;
+  auto condition = [this](int label) {
+    return label < static_cast<int>(problem_.conditions.size()) ? problem_.conditions[label]
+                                                                 : FaceCondition::free_surface;
+  };
+  for (FaceCondition f : problem_.conditions) {
+    if (f == FaceCondition::traction && !problem_.traction)
       throw std::invalid_argument("LrpimModel: a traction face needs LrpimProblem::traction");
+    if (f == FaceCondition::displacement && !problem_.prescribed_displacement)
+      throw std::invalid_argument("LrpimModel: a displacement face needs LrpimProblem::prescribed_displacement");
+    if (f == FaceCondition::elastic_support && !problem_.support_stiffness)
+      throw std::invalid_argument("LrpimModel: an elastic-support face needs LrpimProblem::support_stiffness");
   }
-  if (has_displacement && !problem_.prescribed_displacement)
-    throw std::invalid_argument("LrpimModel: a displacement face needs LrpimProblem::prescribed_displacement");
   const double h = problem_.node_spacing, r_q = problem_.alpha_q * h, tol = 1e-9 * h;
-  constrained_.assign(n, false);
-  for (int i = 0; i < n; ++i)
-    for (int f = 0; f < kBoxFaces; ++f)
-      if (problem_.faces[f] == FaceCondition::displacement &&
-          problem_.body.on_face(f, problem_.nodes.row(i).transpose(), tol))
-        constrained_[i] = true;
 
   // Local sub-domains and boundaries of the nodes that carry equations (constrained nodes have u_i = u-bar).
-  std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), tra(n);
+  std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
+  constrained_.assign(n, false);
   double min_rcond = 1.0, defect = 0.0;
-  std::string error;
+  std::exception_ptr error;  // the first, rethrown as it is (SingularRpimMatrix keeps its data)
 #pragma omp parallel for schedule(dynamic, 4) reduction(min : min_rcond) reduction(max : defect)
   for (int i = 0; i < n; ++i) {
-    if (constrained_[i]) continue;
     try {
       const Eigen::Vector3d c = problem_.nodes.row(i).transpose();
+      const LocalSurface local(body, c, r_q, tol);
+      bool held = false;
+      for (int t : local.touching()) held = held || condition(body.label(t)) == FaceCondition::displacement;
+      constrained_[i] = held;
+      if (held) continue;
       RpimEvaluation e;
-      auto tabulate = [&](const LocalPoint& lp, const Eigen::Vector3d& normal, bool with_trial) {
+      auto tabulate = [&](const LocalPoint& lp, const Eigen::Vector3d& normal, bool gradients) {
         LocalIntegrationPoint p;
         p.test_node = i;
         p.weight = lp.weight;
@@ -72,30 +117,48 @@ LrpimModel::LrpimModel(LrpimProblem problem)
         p.dv = lp.dv;
         p.normal = normal;
         p.x = lp.x;
-        if (with_trial) {
-          rpim_.evaluate(lp.x, true, &e);
-          min_rcond = std::min(min_rcond, e.rcond);
-          p.support = e.nodes;
+        rpim_.evaluate(lp.x, gradients, &e);
+        min_rcond = std::min(min_rcond, e.rcond);
+        p.support = e.nodes;
+        if (gradients)
           p.dphi = e.dphi;
-        }
+        else
+          p.phi = e.phi;
         return p;
       };
-      for (const LocalPoint& lp : sphere_points(c, r_q, problem_.body, problem_.rule))
+      for (const LocalPoint& lp : sphere_points(c, r_q, local, problem_.rule))
         if (lp.weight > 0.0 && lp.dv.squaredNorm() > 0.0) vol[i].push_back(tabulate(lp, Eigen::Vector3d::Zero(), true));
-      for (int f = 0; f < kBoxFaces; ++f) {
-        if (problem_.faces[f] == FaceCondition::free_surface) continue;
-        const bool reaction = problem_.faces[f] == FaceCondition::displacement;
-        for (const LocalPoint& lp : face_points(c, r_q, problem_.body, f, problem_.rule)) {
-          if (!(lp.weight > 0.0 && lp.v > 0.0)) continue;
-          (reaction ? rea[i] : tra[i]).push_back(tabulate(lp, problem_.body.normal(f), reaction));
+      // The boundary: every triangle within r_q. Its points feed the divergence identity (free faces too: v n is
+      // there as well) and, by the triangle's condition, the reaction, support or traction integrals.
+      Eigen::Vector3d boundary = Eigen::Vector3d::Zero();
+      for (int t : local.triangles()) {
+        const FaceCondition f = condition(body.label(t));
+        const Eigen::Vector3d normal = body.normal(t);
+        for (const LocalPoint& lp : triangle_points(c, r_q, body.corner(t, 0), body.corner(t, 1), body.corner(t, 2),
+                                                    problem_.rule)) {
+          boundary += lp.weight * lp.v * normal;
+          if (f == FaceCondition::traction) {
+            LocalIntegrationPoint p;
+            p.test_node = i;
+            p.weight = lp.weight;
+            p.v = lp.v;
+            p.dv.setZero();
+            p.normal = normal;
+            p.x = lp.x;
+            tra[i].push_back(std::move(p));
+          } else if (f == FaceCondition::displacement) {
+            rea[i].push_back(tabulate(lp, normal, true));
+          } else if (f == FaceCondition::elastic_support) {
+            const double k_s = problem_.support_stiffness(lp.x);
+            if (!(k_s > 0.0)) continue;
+            LocalIntegrationPoint p = tabulate(lp, normal, false);
+            p.stiffness = k_s;
+            sup[i].push_back(std::move(p));
+          }
         }
       }
-      // The divergence defect of this local domain, over every face (free ones included: v n is there too).
-      Eigen::Vector3d boundary = Eigen::Vector3d::Zero(), volume = Eigen::Vector3d::Zero();
+      Eigen::Vector3d volume = Eigen::Vector3d::Zero();
       double measure = 0.0;
-      for (int f = 0; f < kBoxFaces; ++f)
-        for (const LocalPoint& lp : face_points(c, r_q, problem_.body, f, problem_.rule))
-          boundary += lp.weight * lp.v * problem_.body.normal(f);
       for (const LocalIntegrationPoint& p : vol[i]) volume += p.weight * p.dv, measure += p.weight;
       if (measure > 0.0) {
         const Eigen::Vector3d xi = (boundary - volume) / measure;
@@ -103,123 +166,213 @@ LrpimModel::LrpimModel(LrpimProblem problem)
         if (problem_.divergence_correction)
           for (LocalIntegrationPoint& p : vol[i]) p.dv += xi;
       }
-    } catch (const std::exception& ex) {
+    } catch (...) {
 #pragma omp critical
-      if (error.empty()) error = ex.what();
+      if (!error) error = std::current_exception();
     }
   }
-  if (!error.empty()) throw std::runtime_error("LrpimModel set-up: " + error);
-  for (int i = 0; i < n; ++i) {
-    volume_.insert(volume_.end(), vol[i].begin(), vol[i].end());
-    reaction_.insert(reaction_.end(), rea[i].begin(), rea[i].end());
-    traction_.insert(traction_.end(), tra[i].begin(), tra[i].end());
-  }
+  if (error) std::rethrow_exception(error);
+  auto gather = [n](std::vector<std::vector<LocalIntegrationPoint>>& per_node, std::vector<LocalIntegrationPoint>* all,
+                    std::vector<int>* begin) {
+    begin->assign(n + 1, 0);
+    size_t total = 0;
+    for (int i = 0; i < n; ++i) total += per_node[i].size();
+    all->reserve(total);
+    for (int i = 0; i < n; ++i) {
+      (*begin)[i] = static_cast<int>(all->size());
+      std::move(per_node[i].begin(), per_node[i].end(), std::back_inserter(*all));
+      std::vector<LocalIntegrationPoint>().swap(per_node[i]);
+    }
+    (*begin)[n] = static_cast<int>(all->size());
+  };
+  gather(vol, &volume_, &volume_begin_);
+  gather(rea, &reaction_, &reaction_begin_);
+  gather(sup, &support_, &support_begin_);
+  gather(tra, &traction_, &traction_begin_);
   states_.assign(volume_.size() + reaction_.size(), core::KelvinState{});
   u_ = Eigen::VectorXd::Zero(3 * n);
   // Constrained rows read s (u_i - u-bar_i): s = K1 h [N/m] gives them the size of a stiffness row.
   constraint_scale_ = problem_.material.K1 * h;
+  build_pattern();
   statistics_.num_nodes = n;
   for (bool b : constrained_) statistics_.num_constrained_nodes += b;
   statistics_.num_volume_points = static_cast<int>(volume_.size());
   statistics_.num_reaction_points = static_cast<int>(reaction_.size());
+  statistics_.num_support_points = static_cast<int>(support_.size());
   statistics_.num_traction_points = static_cast<int>(traction_.size());
   statistics_.min_rcond = min_rcond;
   statistics_.divergence_defect = defect;
+  statistics_.matrix_entries = tangent_.nonZeros();
+  solver_ = std::make_unique<Solver>();
+  solver_->kind = problem_.linear_solver;
+  solver_->name = problem_.name;
   statistics_.setup_seconds = seconds_since(t0);
+}
+
+void LrpimModel::build_pattern() {
+  const int n = static_cast<int>(problem_.nodes.rows());
+  std::vector<std::vector<int>> cols(n);
+#pragma omp parallel for schedule(dynamic, 16)
+  for (int i = 0; i < n; ++i) {
+    std::vector<int>& c = cols[i];
+    c.push_back(i);
+    for (int q = volume_begin_[i]; q < volume_begin_[i + 1]; ++q) c.insert(c.end(), volume_[q].support.begin(), volume_[q].support.end());
+    for (int q = reaction_begin_[i]; q < reaction_begin_[i + 1]; ++q) c.insert(c.end(), reaction_[q].support.begin(), reaction_[q].support.end());
+    for (int q = support_begin_[i]; q < support_begin_[i + 1]; ++q) c.insert(c.end(), support_[q].support.begin(), support_[q].support.end());
+    std::sort(c.begin(), c.end());
+    c.erase(std::unique(c.begin(), c.end()), c.end());
+  }
+  row_begin_.assign(n + 1, 0);
+  for (int i = 0; i < n; ++i) row_begin_[i + 1] = row_begin_[i] + static_cast<long long>(cols[i].size());
+  columns_.resize(row_begin_[n]);
+  for (int i = 0; i < n; ++i) std::copy(cols[i].begin(), cols[i].end(), columns_.begin() + row_begin_[i]);
+  const long long nnz = 9 * row_begin_[n];
+  if (nnz > std::numeric_limits<int>::max())
+    throw std::runtime_error("LrpimModel: the tangent has more entries than a 32-bit index holds; use fewer nodes");
+  tangent_.resize(3 * n, 3 * n);
+  tangent_.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* outer = tangent_.outerIndexPtr();
+  int* inner = tangent_.innerIndexPtr();
+  for (int i = 0; i < n; ++i) {
+    const long long len = row_begin_[i + 1] - row_begin_[i];
+    for (int a = 0; a < 3; ++a) {
+      const long long start = 9 * row_begin_[i] + 3 * a * len;
+      outer[3 * i + a] = static_cast<int>(start);
+      for (long long k = 0; k < len; ++k)
+        for (int b = 0; b < 3; ++b) inner[start + 3 * k + b] = 3 * columns_[row_begin_[i] + k] + b;
+    }
+  }
+  outer[3 * n] = static_cast<int>(nnz);
+  std::fill(tangent_.valuePtr(), tangent_.valuePtr() + nnz, 0.0);
 }
 
 // Residual of node i, component j (MLPG1 with test function v_i e_j over Omega_s, boundary Gamma_s):
 //   R_ij = int_{Omega_s} (B(grad v_i) e_j) . sigma(u) dV - int_{Gamma_su} v_i (sigma(u) n)_j dA
-//          - s(t) int_{Gamma_st} v_i t-bar_j dA
-// (the sphere's interior surface carries no term: v_i = 0 there). Tangent: sigma -> C_k (consistent tangent).
-void LrpimModel::assemble(double time, double dt, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* r,
-                          std::vector<core::KelvinState>* new_states) {
-  const int n = statistics_.num_nodes;
+//          + int_{Gamma_sk} v_i k_s u_j dA - s(t) int_{Gamma_st} v_i t-bar_j dA
+// (the sphere's interior surface carries no term: v_i = 0 there; Gamma_sk is the elastic support, t = -k_s u).
+// Tangent: sigma -> C_k (consistent tangent) and k_s u -> k_s phi.
+void LrpimModel::assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r,
+                          std::vector<core::KelvinState>* new_states) const {
+  const int n = static_cast<int>(problem_.nodes.rows());
   r->setZero(3 * n);
-  std::vector<Eigen::Triplet<double>> trip;
-  trip.reserve(volume_.size() * 60 + reaction_.size() * 60 + 3 * n);
   new_states->resize(states_.size());
-  auto add_point = [&](const LocalIntegrationPoint& p, size_t state, bool reaction) {
-    core::Vector6 eps = core::Vector6::Zero();
-    for (int a = 0; a < static_cast<int>(p.support.size()); ++a)
-      eps += b_block(p.dphi.col(a)) * u_.segment<3>(3 * p.support[a]);
-    const core::KelvinResponse resp = law_.update(states_[state], eps, dt, &(*new_states)[state]);
-    // Test operator (3x6): B(grad v)^T for the volume, -v B(n)^T for the reaction sigma n.
-    const Eigen::Matrix<double, 3, 6> test =
-        reaction ? Eigen::Matrix<double, 3, 6>(-p.v * b_block(p.normal).transpose())
-                 : Eigen::Matrix<double, 3, 6>(b_block(p.dv).transpose());
-    r->segment<3>(3 * p.test_node) += p.weight * test * resp.stress;
-    const Eigen::Matrix<double, 3, 6> tc = p.weight * test * resp.tangent;
-    for (int a = 0; a < static_cast<int>(p.support.size()); ++a) {
-      const Eigen::Matrix3d blk = tc * b_block(p.dphi.col(a));
-      for (int rr = 0; rr < 3; ++rr)
-        for (int cc = 0; cc < 3; ++cc) trip.emplace_back(3 * p.test_node + rr, 3 * p.support[a] + cc, blk(rr, cc));
-    }
-  };
-  for (size_t q = 0; q < volume_.size(); ++q) add_point(volume_[q], q, false);
-  for (size_t q = 0; q < reaction_.size(); ++q) add_point(reaction_[q], volume_.size() + q, true);
+  double* values = k ? k->valuePtr() : nullptr;
   const double s = problem_.load_scale ? problem_.load_scale(time) : 1.0;
-  for (const LocalIntegrationPoint& p : traction_)
-    r->segment<3>(3 * p.test_node) -= s * p.weight * p.v * problem_.traction(p.x);
+  std::exception_ptr error;  // the first, rethrown as it is (core::InadmissibleStrain keeps its data)
+#pragma omp parallel for schedule(dynamic, 16)
   for (int i = 0; i < n; ++i) {
-    if (!constrained_[i]) continue;
-    const Eigen::Vector3d ubar = problem_.prescribed_displacement(problem_.nodes.row(i).transpose());
-    r->segment<3>(3 * i) = constraint_scale_ * (u_.segment<3>(3 * i) - ubar);
-    for (int c = 0; c < 3; ++c) trip.emplace_back(3 * i + c, 3 * i + c, constraint_scale_);
+    try {
+      const long long row = row_begin_[i], len = row_begin_[i + 1] - row_begin_[i];
+      const int* cols = columns_.data() + row;
+      auto slot = [&](int node) { return static_cast<long long>(std::lower_bound(cols, cols + len, node) - cols); };
+      auto add_block = [&](long long k_slot, const Eigen::Matrix3d& blk) {
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) values[9 * row + 3 * a * len + 3 * k_slot + b] += blk(a, b);
+      };
+      if (values) std::fill(values + 9 * row, values + 9 * (row + len), 0.0);
+      Eigen::Ref<Eigen::Vector3d> ri = r->segment<3>(3 * i);
+      if (constrained_[i]) {
+        const Eigen::Vector3d ubar = problem_.prescribed_displacement(problem_.nodes.row(i).transpose());
+        ri = constraint_scale_ * (u_.segment<3>(3 * i) - ubar);
+        if (values) add_block(slot(i), constraint_scale_ * Eigen::Matrix3d::Identity());
+        continue;
+      }
+      auto add_point = [&](const LocalIntegrationPoint& p, size_t state, bool reaction) {
+        core::Vector6 eps = core::Vector6::Zero();
+        for (int a = 0; a < static_cast<int>(p.support.size()); ++a)
+          eps += b_block(p.dphi.col(a)) * u_.segment<3>(3 * p.support[a]);
+        const core::KelvinResponse resp = law_.update(states_[state], eps, dt, &(*new_states)[state]);
+        // Test operator (3x6): B(grad v)^T for the volume, -v B(n)^T for the reaction sigma n.
+        const Eigen::Matrix<double, 3, 6> test =
+            reaction ? Eigen::Matrix<double, 3, 6>(-p.v * b_block(p.normal).transpose())
+                     : Eigen::Matrix<double, 3, 6>(b_block(p.dv).transpose());
+        ri += p.weight * test * resp.stress;
+        if (!values) return;
+        const Eigen::Matrix<double, 3, 6> tc = p.weight * test * resp.tangent;
+        for (int a = 0; a < static_cast<int>(p.support.size()); ++a)
+          add_block(slot(p.support[a]), tc * b_block(p.dphi.col(a)));
+      };
+      for (int q = volume_begin_[i]; q < volume_begin_[i + 1]; ++q) add_point(volume_[q], q, false);
+      for (int q = reaction_begin_[i]; q < reaction_begin_[i + 1]; ++q)
+        add_point(reaction_[q], volume_.size() + q, true);
+      for (int q = support_begin_[i]; q < support_begin_[i + 1]; ++q) {
+        const LocalIntegrationPoint& p = support_[q];
+        const double c = p.weight * p.v * p.stiffness;
+        for (int a = 0; a < static_cast<int>(p.support.size()); ++a) {
+          ri += c * p.phi[a] * u_.segment<3>(3 * p.support[a]);
+          if (values) add_block(slot(p.support[a]), c * p.phi[a] * Eigen::Matrix3d::Identity());
+        }
+      }
+      for (int q = traction_begin_[i]; q < traction_begin_[i + 1]; ++q) {
+        const LocalIntegrationPoint& p = traction_[q];
+        ri -= s * p.weight * p.v * problem_.traction(p.x);
+      }
+    } catch (...) {
+#pragma omp critical
+      if (!error) error = std::current_exception();
+    }
   }
-  k->resize(3 * n, 3 * n);
-  k->setFromTriplets(trip.begin(), trip.end());
+  if (error) std::rethrow_exception(error);
 }
 
 void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStepRecord&)>& on_step) {
   const int n = statistics_.num_nodes;
-  // The external load's size, for the relative stopping test.
+  // The external load's size at full load, for the relative stopping test.
   double f_ext = 0.0;
   {
     Eigen::VectorXd f = Eigen::VectorXd::Zero(3 * n);
     for (const LocalIntegrationPoint& p : traction_) f.segment<3>(3 * p.test_node) += p.weight * p.v * problem_.traction(p.x);
     f_ext = f.norm();
   }
-  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-  bool analysed = false;
-  Eigen::SparseMatrix<double> k;
   Eigen::VectorXd r;
   std::vector<core::KelvinState> trial;
+  const bool full_newton = !(problem_.refactor_contraction > 0.0);
   for (double t_new : problem_.step_times) {
+    const auto t_step = Clock::now();
     const double dt = t_new - time_;
     if (dt < 0.0) throw std::invalid_argument("LrpimModel: step times must not decrease");
     for (int i = 0; i < n; ++i)
       if (constrained_[i]) u_.segment<3>(3 * i) = problem_.prescribed_displacement(problem_.nodes.row(i).transpose());
     LrpimStepRecord rec;
     rec.time = t_new;
-    double reference = f_ext;
+    double reference = f_ext, last = 0.0;
     for (int it = 0;; ++it) {
       auto ta = Clock::now();
-      assemble(t_new, dt, &k, &r, &trial);
-      statistics_.assembly_seconds += seconds_since(ta);
+      assemble(t_new, dt, full_newton ? &tangent_ : nullptr, &r, &trial);
       const double rn = r.norm();
       if (it == 0) reference = std::max(reference, rn);
       rec.residual = reference > 0.0 ? rn / reference : rn;
-      if (rn <= 1e-10 * reference || reference == 0.0) break;
-      if (it == 25) {
+      rec.residuals.push_back(rec.residual);
+      const bool converged = rn <= problem_.newton_tolerance * reference || reference == 0.0;
+      // Modified Newton: keep the factors while they contract the residual enough.
+      const bool refactor = !converged && (full_newton || !solver_->factored ||
+                                           (it > 0 && rn > problem_.refactor_contraction * last));
+      if (refactor && !full_newton) assemble(t_new, dt, &tangent_, &r, &trial);
+      rec.assembly_seconds += seconds_since(ta);
+      if (converged) break;
+      if (it == problem_.max_newton_iterations) {
         std::ostringstream s;
         s << "LrpimModel '" << problem_.name << "': Newton did not converge at t = " << t_new
-          << " s (relative residual " << rec.residual << " after 25 iterations); shorten the steps or the load";
+          << " s (relative residual " << rec.residual << " after " << it
+          << " iterations); shorten the steps or the load";
         throw std::runtime_error(s.str());
       }
+      last = rn;
       auto ts = Clock::now();
-      k.makeCompressed();
-      if (!analysed) lu.analyzePattern(k), analysed = true;
-      lu.factorize(k);
-      if (lu.info() != Eigen::Success)
-        throw std::runtime_error("LrpimModel '" + problem_.name + "': the tangent is singular (SparseLU: " +
-                                 lu.lastErrorMessage() + "); check that the body is held (a displacement face)");
-      u_ -= lu.solve(r);
-      statistics_.solve_seconds += seconds_since(ts);
+      if (refactor) {
+        solver_->factorise(tangent_);
+        ++rec.factorisations;
+      }
+      u_ -= solver_->solve(r);
+      rec.solve_seconds += seconds_since(ts);
       rec.newton_iterations = it + 1;
     }
     states_ = trial;
     time_ = t_new;
+    rec.wall_seconds = seconds_since(t_step);
+    statistics_.assembly_seconds += rec.assembly_seconds;
+    statistics_.solve_seconds += rec.solve_seconds;
+    statistics_.factorisations += rec.factorisations;
     steps_.push_back(rec);
     if (on_step) on_step(*this, rec);
   }

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <Eigen/SparseCore>
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "core/kelvin_law.hpp"
@@ -23,20 +24,29 @@ struct LocalIntegrationPoint {
   Eigen::Vector3d dv;       ///< grad v [1/m] (volume points)
   Eigen::Vector3d normal;   ///< outward unit normal (reaction points on displacement faces); zero for volume
   Eigen::Vector3d x;        ///< [m]
+  double stiffness = 0.0;   ///< k_s(x) [Pa/m] (elastic-support points)
   std::vector<int> support;                          ///< #n trial nodes
-  Eigen::Matrix<double, 3, Eigen::Dynamic> dphi;     ///< 3 by #n [1/m]
+  Eigen::VectorXd phi;                               ///< #n (elastic-support points; empty otherwise)
+  Eigen::Matrix<double, 3, Eigen::Dynamic> dphi;     ///< 3 by #n [1/m] (volume and reaction points)
 };
+
+using LrpimMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
 /// Per step: what Newton did.
 struct LrpimStepRecord {
   double time = 0.0;  ///< [s]
   int newton_iterations = 0;
   double residual = 0.0;  ///< final ||R|| / reference
+  std::vector<double> residuals;  ///< ||R|| / reference at every iteration (the first before any solve)
+  int factorisations = 0;         ///< tangents factorised in this step
+  double wall_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;  ///< this step's
 };
 
 struct LrpimStatistics {
   int num_nodes = 0, num_constrained_nodes = 0;
-  int num_volume_points = 0, num_reaction_points = 0, num_traction_points = 0;
+  int num_volume_points = 0, num_reaction_points = 0, num_traction_points = 0, num_support_points = 0;
+  long long matrix_entries = 0;  ///< stored entries of the tangent
+  int factorisations = 0;
   double min_rcond = 1.0;  ///< smallest rcond of G met while tabulating
   /// max over nodes of |int v n dA - int grad v dV| * r_q / int dV before the correction (0 for an exact rule)
   double divergence_defect = 0.0;
@@ -48,6 +58,7 @@ class LrpimModel {
   /// Tabulates the local quadrature and the RPIM functions of every point (throws SingularRpimMatrix or
   /// std::invalid_argument naming what to change).
   explicit LrpimModel(LrpimProblem problem);
+  ~LrpimModel();
 
   /// Every step of problem().step_times; `on_step` (optional) is called after each converged step.
   /// @throws std::runtime_error when Newton does not converge in 25 iterations (names the step and residual)
@@ -66,18 +77,32 @@ class LrpimModel {
   const std::vector<LocalIntegrationPoint>& volume_points() const { return volume_; }
 
  private:
-  void assemble(double time, double dt, Eigen::SparseMatrix<double>* k, Eigen::VectorXd* r,
-                std::vector<core::KelvinState>* new_states);
+  struct Solver;
+  /// R (and with k non-null the tangent's values, into the fixed pattern) at u_, time t with step dt; the points'
+  /// new states into new_states. Parallel over test nodes (each owns its rows).
+  void assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r,
+                std::vector<core::KelvinState>* new_states) const;
+  void build_pattern();
 
   LrpimProblem problem_;
   NodeSearch search_;
   RpimShapeFunctions rpim_;
   core::KelvinLaw law_;
   std::vector<bool> constrained_;                 ///< per node: on a displacement face
+  // Points node by node: node i's points of each kind are [begin[i], begin[i + 1]).
   std::vector<LocalIntegrationPoint> volume_;     ///< local sub-domains
   std::vector<LocalIntegrationPoint> reaction_;   ///< local boundaries on displacement faces
+  std::vector<LocalIntegrationPoint> support_;    ///< local boundaries on elastic-support faces
   std::vector<LocalIntegrationPoint> traction_;   ///< local boundaries on traction faces (no trial functions)
+  std::vector<int> volume_begin_, reaction_begin_, support_begin_, traction_begin_;
   std::vector<core::KelvinState> states_;         ///< volume points, then reaction points
+  // The tangent's pattern: node i's row couples to columns_[row_begin_[i] .. row_begin_[i + 1]) (ascending nodes),
+  // each a dense 3x3 block; entry (3i + a, 3 columns_[row_begin_[i] + k] + b) is value 9 row_begin_[i] +
+  // 3 a L_i + 3 k + b with L_i the row's length.
+  std::vector<long long> row_begin_;
+  std::vector<int> columns_;
+  LrpimMatrix tangent_;
+  std::unique_ptr<Solver> solver_;
   Eigen::VectorXd u_;
   double time_ = 0.0;
   double constraint_scale_ = 0.0;

@@ -1,35 +1,48 @@
 #pragma once
-// What the LRPIM model solves: a node cloud in a box body, the boundary conditions per face, the Kelvin law and
-// the step times (docs/LRPIM.md). The same problem class as the EFG's verification problems (meshless/efg/
-// efg_problem.hpp), without the background mesh: only the nodes are used.
-#include <array>
+// What the LRPIM model solves: a node cloud in a body given by its closed boundary surface, a boundary condition per
+// triangle label, the Kelvin law and the step times (docs/LRPIM.md). The same problem class as the EFG's
+// (meshless/efg/efg_problem.hpp), without the background mesh: only the nodes and the boundary triangles are used.
+// A box (the verification problems) is SurfaceBody::from_box, whose labels are the faces -x +x -y +y -z +z; a load
+// case's body (meshless/lrpim/lrpim_case.hpp) is the node cloud's boundary, labelled by core::FaceTag.
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "core/kelvin_law.hpp"
 #include "core/tet_mesh.hpp"
-#include "meshless/lrpim/box_body.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
 #include "meshless/lrpim/rpim_shape_functions.hpp"
+#include "meshless/lrpim/surface_body.hpp"
 
 namespace meshless::lrpim {
 
-/// The condition on one face of the box.
+/// The condition on the triangles of one label.
 enum class FaceCondition {
-  free_surface,  ///< t = 0: no term (the natural condition)
-  traction,      ///< t = load_scale(t) * traction(X), through the local boundary integral
-  displacement,  ///< u = prescribed_displacement(X): nodal values set (Kronecker delta), and the unknown
-                 ///< reaction sigma n integrated on the local boundary of the nodes whose sphere reaches it
+  free_surface,     ///< t = 0: no term (the natural condition)
+  traction,         ///< t = load_scale(t) * traction(X), through the local boundary integral
+  displacement,     ///< u = prescribed_displacement(X): the nodes on these triangles get their values directly
+                    ///< (Kronecker delta), and the unknown reaction sigma n is integrated on the local boundary of
+                    ///< the nodes whose sphere reaches them
+  elastic_support,  ///< t = -support_stiffness(X) u (a Robin term, core::FixedRegionSpec's elastic support): a
+                    ///< natural condition, integrated on the local boundary like a traction, no node constrained
+};
+
+/// The linear solver of each Newton iteration (the tangent is not symmetric).
+enum class LrpimLinearSolver {
+  sparse_lu,  ///< Eigen::SparseLU (COLAMD), no MPI needed: the small verification problems
+  mumps,      ///< MUMPS sparse LU with METIS (meshless/solvers/mumps_lu.hpp); needs MPI initialised
 };
 
 struct LrpimProblem {
   std::string name = "lrpim";
-  core::PointMatrix nodes;  ///< #nodes by 3 [m]; boundary nodes must lie on the faces to 1e-9 of the spacing
-  BoxBody body;
-  std::array<FaceCondition, kBoxFaces> faces{};  ///< -x, +x, -y, +y, -z, +z
+  core::PointMatrix nodes;  ///< #nodes by 3 [m], inside the body or on its surface (to 1e-9 of the spacing)
+  std::optional<SurfaceBody> body;
+  /// The condition of each triangle label (SurfaceBody::label); labels beyond the vector's end are free.
+  std::vector<FaceCondition> conditions;
   std::function<Eigen::Vector3d(const Eigen::Vector3d&)> prescribed_displacement;  ///< [m], held in time
-  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> traction;                 ///< [Pa]
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> traction;                 ///< [Pa] at full load
+  std::function<double(const Eigen::Vector3d&)> support_stiffness;                 ///< k_s [Pa/m]
   std::function<double(double)> load_scale;  ///< factor on the traction at time t; empty: 1 (a step load)
   core::KelvinParameters material;
   /// Times of the steps [s]. The first step goes from t = 0 to step_times[0]; step_times[0] = 0 is the
@@ -45,6 +58,15 @@ struct LrpimProblem {
   /// functions, here per local domain). Without it the clipped spheres' angular quadrature error breaks the
   /// patch test at ~1e-3 (docs/LRPIM.md §4).
   bool divergence_correction = true;
+
+  /// Newton stops when ||R|| <= newton_tolerance * max(||external force at full load||, ||R|| at the step's start).
+  double newton_tolerance = 1e-10;
+  int max_newton_iterations = 25;
+  /// 0: full Newton (the tangent factorised at every iteration). > 0: the last factors are reused while each
+  /// iteration reduces ||R|| by at least this ratio, and the current tangent is factorised when one does not (the
+  /// EFG's rule, EfgOptions::refactor_contraction): a nearly linear case then factorises once or twice per run.
+  double refactor_contraction = 0.0;
+  LrpimLinearSolver linear_solver = LrpimLinearSolver::sparse_lu;
 };
 
 }  // namespace meshless::lrpim

@@ -71,15 +71,30 @@ RpimInvariantReport rpim_invariants(const RpimParameters& parameters, int points
   return r;
 }
 
-LrpimPatchReport run_lrpim_patch_test(int cells, double alpha_q, int polar, int azimuthal, bool divergence_correction) {
+LrpimPatchReport run_lrpim_patch_test(int cells, double alpha_q, int polar, int azimuthal, bool divergence_correction,
+                                      bool cloud_surface) {
   const double edge = 0.05, spacing = edge / cells;
   LrpimProblem p;
   p.name = "lrpim patch test";
-  p.nodes = box_nodes(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(edge), cells, cells, cells, 0.2, 11);
-  p.body.lo = Eigen::Vector3d::Zero();
-  p.body.hi = Eigen::Vector3d::Constant(edge);
-  p.faces = {FaceCondition::displacement, FaceCondition::traction, FaceCondition::displacement,
-             FaceCondition::traction,     FaceCondition::displacement, FaceCondition::traction};
+  const core::TetMesh mesh =
+      make_box_mesh(Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(edge), cells, cells, cells, {}, 0.2, 11);
+  p.nodes = mesh.vertices;
+  if (cloud_surface) {
+    // Label each boundary triangle with its box face (-x +x -y +y -z +z) from its outward normal.
+    const SurfaceBody faces = SurfaceBody::from_mesh_boundary(mesh);
+    std::vector<int> labels(faces.num_triangles());
+    for (int t = 0; t < faces.num_triangles(); ++t) {
+      const Eigen::Vector3d& n = faces.normal(t);
+      int axis = 0;
+      n.cwiseAbs().maxCoeff(&axis);
+      labels[t] = 2 * axis + (n[axis] > 0.0 ? 1 : 0);
+    }
+    p.body = SurfaceBody(faces.vertices(), faces.triangles(), labels);
+  } else {
+    p.body = SurfaceBody::from_box(BoxBody{Eigen::Vector3d::Zero(), Eigen::Vector3d::Constant(edge)});
+  }
+  p.conditions = {FaceCondition::displacement, FaceCondition::traction, FaceCondition::displacement,
+                  FaceCondition::traction,     FaceCondition::displacement, FaceCondition::traction};
   p.material = tissue_material(0.3, 0.0);
   p.node_spacing = spacing;
   p.alpha_q = alpha_q;
@@ -133,11 +148,10 @@ LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, d
   const double h = D / nd;
   LrpimProblem p;
   p.name = "lrpim cantilever";
-  p.body.lo = Eigen::Vector3d(0.0, -D / 2, -T / 2);
-  p.body.hi = Eigen::Vector3d(L, D / 2, T / 2);
-  p.nodes = box_nodes(p.body.lo, p.body.hi, 5 * nd, nd, nd, 0.0, 1);
-  p.faces = {FaceCondition::displacement, FaceCondition::traction,     FaceCondition::free_surface,
-             FaceCondition::free_surface, FaceCondition::free_surface, FaceCondition::free_surface};
+  const BoxBody box{Eigen::Vector3d(0.0, -D / 2, -T / 2), Eigen::Vector3d(L, D / 2, T / 2)};
+  p.body = SurfaceBody::from_box(box);
+  p.nodes = box_nodes(box.lo, box.hi, 5 * nd, nd, nd, 0.0, 1);
+  p.conditions = {FaceCondition::displacement, FaceCondition::traction};
   p.material = tissue_material(0.0, 0.0);
   p.node_spacing = h;
   p.rpim = rpim;
@@ -193,11 +207,10 @@ LrpimCreepReport run_lrpim_creep_bar(double k, int steps) {
   const double L = 0.04, a = 0.01, sigma0 = 100.0, t_end = 4.0;
   LrpimProblem p;
   p.name = "lrpim creep bar";
-  p.body.lo = Eigen::Vector3d::Zero();
-  p.body.hi = Eigen::Vector3d(L, a, a);
-  p.nodes = box_nodes(p.body.lo, p.body.hi, 8, 2, 2, 0.0, 1);
-  p.faces = {FaceCondition::displacement, FaceCondition::traction,     FaceCondition::free_surface,
-             FaceCondition::free_surface, FaceCondition::free_surface, FaceCondition::free_surface};
+  const BoxBody box{Eigen::Vector3d::Zero(), Eigen::Vector3d(L, a, a)};
+  p.body = SurfaceBody::from_box(box);
+  p.nodes = box_nodes(box.lo, box.hi, 8, 2, 2, 0.0, 1);
+  p.conditions = {FaceCondition::displacement, FaceCondition::traction};
   p.material = tissue_material(0.0, k);
   p.node_spacing = a / 2;
   p.prescribed_displacement = [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); };

@@ -33,9 +33,11 @@ struct LrpimPatchReport {
 /// Cube of edge 50 mm, `cells` per axis, interior nodes jittered by 0.2 cells; u = a + G X prescribed at the
 /// nodes of the -x, -y, -z faces, the traction sigma n of the exact constant stress on the +x, +y, +z faces
 /// (nu = 0.3, instantaneous elastic step). `alpha_q`, `rule`: the local domain and its quadrature.
-/// `divergence_correction`: LrpimProblem::divergence_correction.
+/// `divergence_correction`: LrpimProblem::divergence_correction. `cloud_surface`: the body is the box mesh's own
+/// boundary triangles (2 per boundary cell face, their vertices the surface nodes), as a load case's body is,
+/// instead of the box's 12 triangles.
 LrpimPatchReport run_lrpim_patch_test(int cells = 5, double alpha_q = 1.5, int polar = 8, int azimuthal = 16,
-                                      bool divergence_correction = true);
+                                      bool divergence_correction = true, bool cloud_surface = false);
 
 struct LrpimCantileverReport {
   int cells_through_height = 0, num_nodes = 0;

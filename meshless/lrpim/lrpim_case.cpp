@@ -1,0 +1,146 @@
+#include "meshless/lrpim/lrpim_case.hpp"
+
+#include <chrono>
+#include <fstream>
+#include <string>
+
+#include "core/case_error.hpp"
+#include "core/load_program.hpp"
+#include "meshless/lrpim/lrpim_model.hpp"
+
+namespace meshless::lrpim {
+
+namespace {
+
+// Peak resident memory of this process so far [bytes] (VmHWM of /proc/self/status); 0 where unavailable.
+double peak_resident_bytes() {
+  std::ifstream status("/proc/self/status");
+  std::string key;
+  while (status >> key) {
+    if (key == "VmHWM:") {
+      double kb = 0.0;
+      status >> kb;
+      return kb * 1024.0;
+    }
+    status.ignore(1 << 12, '\n');
+  }
+  return 0.0;
+}
+
+}  // namespace
+
+LocalQuadratureRule case_quadrature_rule() {
+  LocalQuadratureRule r;
+  r.polar = 4;
+  r.azimuthal = 8;
+  r.radial = 3;
+  return r;
+}
+
+LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
+  if (c.cut || g.cut)
+    throw core::CaseError(c.source_file, "/cut",
+                          "the LRPIM model has no crack treatment; remove /cut from the case, or drop lrpim from the "
+                          "models it runs");
+  LrpimProblem p;
+  p.name = c.name;
+  p.nodes = g.meshless_mesh.vertices;
+  p.body = SurfaceBody::from_mesh_boundary(g.meshless_mesh);
+  const bool elastic = c.fixed_region.support == core::FixedRegionSpec::Support::elastic;
+  // Indexed by core::FaceTag: free, fixed, load, crack (a cut case is refused above).
+  p.conditions = {FaceCondition::free_surface,
+                  elastic ? FaceCondition::elastic_support : FaceCondition::displacement, FaceCondition::traction,
+                  FaceCondition::free_surface};
+  if (elastic) {
+    const core::FixedRegionSpec region = c.fixed_region;
+    p.support_stiffness = [region](const Eigen::Vector3d& x) { return region.support_stiffness(x); };
+  } else {
+    p.prescribed_displacement = [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); };
+  }
+  const core::LoadProgram program = core::load_program(c, g.meshless_mesh);
+  const Eigen::Vector3d t = program.traction;
+  p.traction = [t](const Eigen::Vector3d&) { return t; };
+  p.load_scale = [program](double time) { return program.scale(time); };
+  p.step_times = program.step_times;
+  p.material = c.material;
+  p.node_spacing = c.meshless.node_spacing;
+  p.rpim = options.rpim;
+  p.alpha_q = options.alpha_q;
+  p.rule = options.rule;
+  p.newton_tolerance = options.newton_tolerance;
+  p.max_newton_iterations = options.max_newton_iterations;
+  p.refactor_contraction = options.refactor_contraction;
+  p.linear_solver = options.linear_solver;
+  return p;
+}
+
+LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
+  LrpimProblem problem = lrpim_problem_from_case(c, g, options);
+  const core::LoadProgram program = core::load_program(c, g.meshless_mesh);
+  const double load_area = problem.body->labelled_area(static_cast<int>(core::FaceTag::load));
+  LrpimModel model(std::move(problem));
+  LrpimCaseRun run;
+  const LrpimStatistics& st = model.statistics();
+  run.setup_seconds = st.setup_seconds;
+  run.n_nodes = st.num_nodes;
+  run.n_dofs = 3 * st.num_nodes;
+  model.run([&](const LrpimModel&, const LrpimStepRecord& rec) {
+    LrpimStepReport s;
+    s.step = static_cast<int>(run.steps.size()) + 1;
+    s.time = rec.time;
+    s.wall_seconds = rec.wall_seconds;
+    s.assembly_seconds = rec.assembly_seconds;
+    s.solve_seconds = rec.solve_seconds;
+    s.newton_iterations = rec.newton_iterations;
+    s.factorisations = rec.factorisations;
+    s.residuals = rec.residuals;
+    run.steps.push_back(s);
+    if (options.on_step) options.on_step(s);
+  });
+  run.sample_displacements.resize(g.sample_points.rows(), 3);
+  for (Eigen::Index i = 0; i < g.sample_points.rows(); ++i)
+    run.sample_displacements.row(i) = model.displacement_at(g.sample_points.row(i).transpose()).transpose();
+
+  const LrpimProblem& p = model.problem();
+  nlohmann::json& d = run.details;
+  d["model"] = "LRPIM (RPIM: MQ + linear basis; MLPG1 local weak form; docs/LRPIM.md)";
+  d["nodes"] = st.num_nodes;
+  d["dofs"] = 3 * st.num_nodes;
+  d["constrained_nodes"] = st.num_constrained_nodes;
+  d["boundary_triangles"] = p.body->num_triangles();
+  d["points"] = {{"volume", st.num_volume_points},
+                 {"reaction", st.num_reaction_points},
+                 {"elastic_support", st.num_support_points},
+                 {"traction", st.num_traction_points}};
+  d["tangent_entries"] = st.matrix_entries;
+  d["min_rcond"] = st.min_rcond;
+  d["divergence_defect"] = st.divergence_defect;
+  d["parameters"] = {{"alpha_q", p.alpha_q},
+                     {"r_q_m", p.alpha_q * p.node_spacing},
+                     {"node_spacing_m", p.node_spacing},
+                     {"rpim", {{"num_neighbours", p.rpim.num_neighbours}, {"q", p.rpim.q}, {"alpha_c", p.rpim.alpha_c}}},
+                     {"rule",
+                      {{"polar", p.rule.polar},
+                       {"azimuthal", p.rule.azimuthal},
+                       {"radial", p.rule.radial},
+                       {"boundary_order", p.rule.boundary_order},
+                       {"boundary_subdivision", p.rule.boundary_subdivision}}},
+                     {"divergence_correction", p.divergence_correction},
+                     {"newton_tolerance", p.newton_tolerance},
+                     {"refactor_contraction", p.refactor_contraction},
+                     {"linear_solver", p.linear_solver == LrpimLinearSolver::mumps ? "MUMPS sparse LU (METIS)"
+                                                                                    : "Eigen SparseLU (COLAMD)"}};
+  d["support"] = c.fixed_region.support == core::FixedRegionSpec::Support::elastic ? "elastic (Robin term)"
+                                                                                     : "clamp (nodal u = 0)";
+  d["load"] = {{"patch_area_m2", program.patch_area},
+               {"body_load_area_m2", load_area},
+               {"traction_pa", {program.traction.x(), program.traction.y(), program.traction.z()}},
+               {"total_force_n",
+                {program.traction.x() * load_area, program.traction.y() * load_area, program.traction.z() * load_area}}};
+  d["seconds"] = {{"setup", st.setup_seconds}, {"assembly", st.assembly_seconds}, {"solve", st.solve_seconds}};
+  d["factorisations"] = st.factorisations;
+  d["peak_resident_bytes"] = peak_resident_bytes();
+  return run;
+}
+
+}  // namespace meshless::lrpim

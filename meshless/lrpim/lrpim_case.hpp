@@ -1,0 +1,67 @@
+#pragma once
+// The LRPIM model on a load case (core::Case + core::Geometry): the body is the node cloud's boundary surface
+// (Geometry::meshless_mesh: its vertices are the nodes, its boundary triangles carry core::FaceTag free/fixed/load),
+// and the case's load, support, material and times are translated as the EFG's problem_from_case does
+// (meshless/efg/efg_problem.cpp): core::load_program for the traction (force / this mesh's load-patch area), the ramp
+// and the step times; core::FixedRegionSpec::support_stiffness for an elastic support (a Robin term); a clamp as
+// u = 0 at the nodes on fixed faces. docs/LRPIM.md §3 and §5.
+//
+// Units: SI throughout (m, Pa, s). Thread safety: run_lrpim_case uses OpenMP inside; call it from one thread.
+// With LrpimLinearSolver::mumps (the default here), MPI must be initialised (tissue's main and the MPI test mains do).
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <vector>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "meshless/lrpim/lrpim_problem.hpp"
+
+namespace meshless::lrpim {
+
+/// One converged time step of a case run.
+struct LrpimStepReport {
+  int step = 0;       ///< 1-based
+  double time = 0.0;  ///< [s]
+  double wall_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;  ///< solve: factorisations + solves
+  int newton_iterations = 0;
+  int factorisations = 0;
+  std::vector<double> residuals;  ///< ||R|| / reference per iteration (LrpimProblem::newton_tolerance)
+};
+
+/// The angular rule of the case runs: 4 polar x 8 azimuthal directions x 3 radial points per piece (up to 192
+/// points per node, against 1,024 for the verification rule), chosen for time and memory on lung_small; its effect
+/// on the answer is measured in docs/LRPIM.md §5.
+LocalQuadratureRule case_quadrature_rule();
+
+struct LrpimCaseOptions {
+  LocalQuadratureRule rule = case_quadrature_rule();
+  double alpha_q = 1.5;  ///< r_q / node spacing
+  RpimParameters rpim;   ///< the literature's MQ (q 1.03, alpha_c 4, 20 nodes)
+  LrpimLinearSolver linear_solver = LrpimLinearSolver::mumps;
+  double newton_tolerance = 1e-8;     ///< as the EFG's EfgOptions::newton_tolerance
+  double refactor_contraction = 0.2;  ///< modified Newton, as the EFG's (LrpimProblem::refactor_contraction)
+  int max_newton_iterations = 25;
+  /// Called after each converged step (optional).
+  std::function<void(const LrpimStepReport&)> on_step;
+};
+
+struct LrpimCaseRun {
+  Eigen::MatrixXd sample_displacements;  ///< #samples by 3 [m], at Geometry::sample_points, after the last step
+  double setup_seconds = 0.0;            ///< tabulation of the local quadrature and the RPIM functions, pattern
+  std::vector<LrpimStepReport> steps;
+  int n_nodes = 0, n_dofs = 0;
+  /// What was run and measured: parameters, point counts, tangent entries, smallest rcond, divergence defect,
+  /// load-patch area, traction and total force, factorisations, time split, peak resident memory.
+  nlohmann::json details;
+};
+
+/// The case as an LRPIM problem (no solve). Throws core::CaseError at /cut for a cut case (the LRPIM model has no
+/// crack treatment), and what core::load_program throws (no load face on the cloud).
+LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options = {});
+
+/// Sets up and runs the case through all of its steps; the samples are the RPIM interpolation of the nodal
+/// solution at g.sample_points. Throws core::CaseError (see above), SingularRpimMatrix, core::InadmissibleStrain,
+/// std::runtime_error (Newton did not converge: the message names the step).
+LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options = {});
+
+}  // namespace meshless::lrpim
