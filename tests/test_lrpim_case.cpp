@@ -1,0 +1,128 @@
+// The LRPIM model on a load case (meshless/lrpim/lrpim_case.hpp, docs/LRPIM.md §5): a bar held at one end by the
+// case's elastic support (a Robin term) or clamp and pulled by the case's load patch at the other, against its closed
+// form, with both linear solvers; the load's total force; the refusal of a cut case. The case and its geometry are
+// built in code (the box mesh's boundary tagged as the geometry pipeline tags a lung), so no Gmsh run is needed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <iostream>
+
+#include "core/case.hpp"
+#include "core/case_error.hpp"
+#include "core/geometry.hpp"
+#include "meshless/lrpim/lrpim_case.hpp"
+#include "meshless/verification/box_mesh.hpp"
+
+namespace meshless::lrpim {
+namespace {
+
+constexpr double kLength = 0.04, kSide = 0.01, kStress = 100.0, kSupport = 2.0e5;
+
+// A 40 x 10 x 10 mm bar, 8 x 2 x 2 cells (5 mm nodes): the x = 0 end fixed, the x = L end the load patch, the
+// rest free. nu = 0, so the uniaxial stress state is exact in 3-D; k = 1 as the lung cases. The force is held
+// from t = 0 (ramp 0) over 10 steps of 20 s, so the creep (relaxation time 1 s) has settled at the last step.
+void bar_case(core::FixedRegionSpec::Support support, core::Case* c, core::Geometry* g) {
+  c->name = "lrpim bar";
+  c->source_file = "bar.json";
+  c->material.K1 = 6000.0;
+  c->material.K2 = 12000.0;
+  c->material.eta = 18000.0;
+  c->material.nu = 0.0;
+  c->material.k = 1.0;
+  c->fixed_region.kind = core::FixedRegionSpec::Kind::near_plane;
+  c->fixed_region.point = Eigen::Vector3d::Zero();
+  c->fixed_region.normal = Eigen::Vector3d::UnitX();
+  c->fixed_region.distance = 1e-3;
+  c->fixed_region.support = support;
+  c->fixed_region.stiffness = kSupport;
+  c->load.force = Eigen::Vector3d(kStress * kSide * kSide, 0.0, 0.0);
+  c->load.ramp_time = 0.0;
+  c->time.total = 200.0;
+  c->time.steps = 10;
+  c->meshless.node_spacing = 0.005;
+  g->meshless_mesh = make_box_mesh(
+      Eigen::Vector3d::Zero(), Eigen::Vector3d(kLength, kSide, kSide), 8, 2, 2,
+      [](const Eigen::Vector3d& centroid, const Eigen::Vector3d&) {
+        if (centroid.x() < 1e-9) return core::FaceTag::fixed;
+        if (centroid.x() > kLength - 1e-9) return core::FaceTag::load;
+        return core::FaceTag::free_surface;
+      },
+      0.15, 3);
+  g->sample_points.resize(4, 3);
+  g->sample_points << kLength, 0.5 * kSide, 0.5 * kSide, kLength, 0.0, kSide, 0.5 * kLength, 0.3 * kSide, 0.0,
+      0.0, 0.7 * kSide, 0.2 * kSide;
+}
+
+// The steady state of the Kelvin law under the held uniaxial stress: N = sigma / E_inf, eps = (sqrt(1 + 4kN) - 1)/2k
+// (docs/MATERIAL.md §1.2); the support adds the rigid shift sigma / k_s (t = -k_s u on the x = 0 end).
+Eigen::Vector3d exact_displacement(const core::Case& c, const Eigen::Vector3d& x) {
+  const double n = kStress / c.material.equilibrium_modulus(), k = c.material.k;
+  const double eps = (std::sqrt(1.0 + 4.0 * k * n) - 1.0) / (2.0 * k);
+  const double shift = c.fixed_region.support == core::FixedRegionSpec::Support::elastic ? kStress / kSupport : 0.0;
+  return Eigen::Vector3d(shift + eps * x.x(), 0.0, 0.0);
+}
+
+double run_bar(core::FixedRegionSpec::Support support, LrpimLinearSolver solver, LrpimCaseRun* out = nullptr) {
+  core::Case c;
+  core::Geometry g;
+  bar_case(support, &c, &g);
+  LrpimCaseOptions options;
+  options.linear_solver = solver;
+  options.newton_tolerance = 1e-12;
+  const LrpimCaseRun run = run_lrpim_case(c, g, options);
+  EXPECT_EQ(run.steps.size(), 10u);
+  double worst = 0.0;
+  const double peak = exact_displacement(c, Eigen::Vector3d(kLength, 0, 0)).norm();
+  for (Eigen::Index i = 0; i < g.sample_points.rows(); ++i) {
+    const Eigen::Vector3d u = run.sample_displacements.row(i).transpose();
+    worst = std::max(worst, (u - exact_displacement(c, g.sample_points.row(i).transpose())).norm() / peak);
+  }
+  if (out) *out = run;
+  return worst;
+}
+
+TEST(LrpimCase, ElasticallySupportedBarMatchesTheClosedForm) {
+  LrpimCaseRun run;
+  const double mumps = run_bar(core::FixedRegionSpec::Support::elastic, LrpimLinearSolver::mumps, &run);
+  const double sparse_lu = run_bar(core::FixedRegionSpec::Support::elastic, LrpimLinearSolver::sparse_lu);
+  std::cout << "elastic support: samples off the closed form by " << mumps << " (MUMPS), " << sparse_lu
+            << " (SparseLU) of the tip displacement; " << run.n_nodes << " nodes, "
+            << run.details["points"].dump() << ", factorisations " << run.details["factorisations"] << "\n";
+  // A linear field in a linear-reproducing model with the divergence correction: round-off and Newton's 1e-12.
+  EXPECT_LT(mumps, 1e-12);      // 8.4e-14
+  EXPECT_LT(sparse_lu, 1e-12);  // 8.6e-14
+  // The load's total force is the case's: traction (force / this cloud's load-patch area) times that area.
+  EXPECT_NEAR(run.details["load"]["total_force_n"][0].get<double>(), kStress * kSide * kSide, 1e-15);
+  EXPECT_NEAR(run.details["load"]["patch_area_m2"].get<double>(), kSide * kSide, 1e-18);
+  EXPECT_EQ(run.details["constrained_nodes"].get<int>(), 0);  // the support is a natural condition
+  EXPECT_GT(run.details["points"]["elastic_support"].get<int>(), 0);
+  for (const LrpimStepReport& s : run.steps) EXPECT_LE(s.residuals.back(), 1e-12) << "step " << s.step;
+}
+
+TEST(LrpimCase, ClampedBarMatchesTheClosedForm) {
+  LrpimCaseRun run;
+  const double worst = run_bar(core::FixedRegionSpec::Support::clamp, LrpimLinearSolver::mumps, &run);
+  std::cout << "clamp: samples off the closed form by " << worst << " of the tip displacement; "
+            << run.details["constrained_nodes"] << " nodes held\n";
+  EXPECT_LT(worst, 1e-12);  // 1.3e-13
+  EXPECT_EQ(run.details["constrained_nodes"].get<int>(), 9);  // the 3 x 3 nodes of the x = 0 end
+  EXPECT_GT(run.details["points"]["reaction"].get<int>(), 0);
+}
+
+TEST(LrpimCase, CutCaseIsRefusedWithWhatToDo) {
+  core::Case c;
+  core::Geometry g;
+  bar_case(core::FixedRegionSpec::Support::elastic, &c, &g);
+  c.cut = core::CutSpec{};
+  try {
+    run_lrpim_case(c, g);
+    FAIL() << "a cut case must be refused";
+  } catch (const core::CaseError& e) {
+    EXPECT_EQ(e.json_path(), "/cut");
+    EXPECT_NE(std::string(e.what()).find("no crack treatment"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("remove /cut"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace meshless::lrpim
