@@ -32,6 +32,10 @@ constexpr double kSpareMatrixFraction = 0.01;
 /// an incision before the rows are packed into new arrays.
 constexpr double kSpareTableFraction = 0.25;
 
+/// Room kept in the per-point arrays of a cut body (strain, stress, tangent) for the points a local update adds: a
+/// 10 mm extension on configs/lung_large.json adds about 500 of 200,000 volume points.
+constexpr double kSparePointFraction = 0.05;
+
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -179,24 +183,40 @@ void EfgModel::build_couplings(bool new_pattern) {
   // integrals by the same quadrature the assembly uses, so that the corrected test gradients satisfy the
   // discrete divergence theorem exactly (linear patch test to round-off, eq. 21 with eq. 24's traction term). The
   // boundary integral runs over the outer faces and over both lips of a cut: they bound the body too.
-  Eigen::Matrix3Xd defect = Eigen::Matrix3Xd::Zero(3, n);
-  Eigen::VectorXd support_volume = Eigen::VectorXd::Zero(n);
-  for (int q = 0; q < volume_.size(); ++q)
-    for (int s = volume_.begin(q); s < volume_.end(q); ++s) {
-      defect.col(volume_.nodes[s]) -= volume_.weights[q] * volume_.dphi.col(s);
-      support_volume[volume_.nodes[s]] += volume_.weights[q];
-    }
-  for (int q = 0; q < surface_.size(); ++q)
-    for (int s = surface_.begin(q); s < surface_.end(q); ++s)
-      defect.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * surface_.normals.col(q);
-  divergence_defect_ = defect.colwise().norm().maxCoeff();
+  // A local update of the cut (advance_cut) has already taken the rows it dropped out of these sums and added the
+  // rows it evaluated (add_divergence_terms), a few per cent of them, instead of summing every row again.
+  if (new_pattern) {
+    defect_ = Eigen::Matrix3Xd::Zero(3, n);
+    support_volume_ = Eigen::VectorXd::Zero(n);
+    for (int q = 0; q < volume_.size(); ++q)
+      for (int s = volume_.begin(q); s < volume_.end(q); ++s) {
+        defect_.col(volume_.nodes[s]) -= volume_.weights[q] * volume_.dphi.col(s);
+        support_volume_[volume_.nodes[s]] += volume_.weights[q];
+      }
+    for (int q = 0; q < surface_.size(); ++q)
+      for (int s = surface_.begin(q); s < surface_.end(q); ++s)
+        defect_.col(surface_.nodes[s]) += surface_.weights[q] * surface_.phi[s] * surface_.normals.col(q);
+  }
+  divergence_defect_ = defect_.colwise().norm().maxCoeff();
   vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
   if (options_.variationally_consistent)
-    for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect.col(i) / support_volume[i];
+    for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect_.col(i) / support_volume_[i];
+  // Per-point arrays with room for the points a cut's local update adds (a cell split differently), so that an
+  // update neither reallocates nor copies them.
   const int nq = volume_.size();
-  strain_.assign(nq, core::Vector6::Zero());
-  stress_.assign(nq, core::Vector6::Zero());
+  const std::size_t room = problem_.cut ? static_cast<std::size_t>(nq * (1.0 + kSparePointFraction)) : nq;
+  if (tangent_.capacity() < static_cast<std::size_t>(nq)) {
+    std::vector<core::Matrix6>().swap(tangent_);  // scratch: its values need not be copied
+    tangent_.reserve(room);
+  }
   tangent_.resize(nq);  // scratch of the assembly, which sets it first (update_material): not cleared
+  for (auto* v : {&strain_, &stress_}) {
+    if (v->capacity() < static_cast<std::size_t>(nq)) {
+      std::vector<core::Vector6>().swap(*v);
+      v->reserve(room);
+    }
+    v->assign(nq, core::Vector6::Zero());
+  }
   residual_ = Eigen::VectorXd::Zero(3 * n);
   external_ = Eigen::VectorXd::Zero(3 * n);
 
@@ -216,45 +236,73 @@ void EfgModel::build_couplings(bool new_pattern) {
 
 namespace {
 
+/// The points of a table grouped by (cell, side), each group in increasing point order: a counting sort instead of
+/// a hash map of vectors (one allocation per cell), which cost more than the rest of match_points on the lung.
+struct PointsByCellAndSide {
+  std::vector<int> offsets;  // per key (4 cell + side + 1), into `points`
+  std::vector<int> points;
+  static long long key(int cell, int side) { return 4LL * cell + (side + 1); }
+  explicit PointsByCellAndSide(const ShapeTable& table) {
+    long long keys = 0;
+    for (int q = 0; q < table.size(); ++q) keys = std::max(keys, key(table.cells[q], table.sides[q]) + 1);
+    offsets.assign(static_cast<std::size_t>(keys) + 1, 0);
+    for (int q = 0; q < table.size(); ++q) ++offsets[key(table.cells[q], table.sides[q]) + 1];
+    for (std::size_t k = 1; k < offsets.size(); ++k) offsets[k] += offsets[k - 1];
+    points.resize(table.size());
+    std::vector<int> fill(offsets.begin(), offsets.end() - 1);
+    for (int q = 0; q < table.size(); ++q) points[fill[key(table.cells[q], table.sides[q])]++] = q;
+  }
+  /// [first, last) into `points` of the group of (cell, side); empty when there is none.
+  std::pair<int, int> group(int cell, int side) const {
+    const long long k = key(cell, side);
+    if (k < 0 || k + 1 >= static_cast<long long>(offsets.size())) return {0, 0};
+    return {offsets[k], offsets[k + 1]};
+  }
+};
+
 /// For each point of `now`, the row of `before` at the same place (same cell, same side, bitwise the same
-/// coordinates), or -1.
+/// coordinates), or -1. Of several such rows, the first.
 template <class Points>  // QuadraturePoints or ShapeTable
 std::vector<int> match_points(const ShapeTable& before, const Points& now) {
-  std::unordered_map<long long, std::vector<int>> by_cell;
-  auto key = [](int cell, int side) { return 4LL * cell + (side + 1); };
-  for (int q = 0; q < before.size(); ++q) by_cell[key(before.cells[q], before.sides[q])].push_back(q);
+  const PointsByCellAndSide groups(before);
   std::vector<int> match(now.size(), -1);
-  for (int q = 0; q < now.size(); ++q) {
-    const auto it = by_cell.find(key(now.cells[q], now.sides[q]));
-    if (it == by_cell.end()) continue;
-    for (int old : it->second)
-      if (before.points.row(old) == now.points.row(q)) {
-        match[q] = old;
+  parallel_for(now.size(), 4096, [&](int q) {
+    const auto [first, last] = groups.group(now.cells[q], now.sides[q]);
+    for (int k = first; k < last; ++k)
+      if (before.points.row(groups.points[k]) == now.points.row(q)) {
+        match[q] = groups.points[k];
         break;
       }
-  }
+  });
   return match;
 }
 
 /// History (eqs. 15-16) carried onto the volume points `now`, `same` their matches in `before` (match_points): a
 /// point that is still there keeps its state; a new point (a cell split differently) takes the state of the nearest
-/// old point of the same cell.
+/// old point of the same cell (the first of equally near ones).
 template <class Points>  // QuadraturePoints or ShapeTable
 std::vector<core::KelvinState> carried_history(const ShapeTable& before, const std::vector<core::KelvinState>& states,
                                                const Points& now, const std::vector<int>& same) {
   std::vector<core::KelvinState> carried(now.size());
-  std::unordered_map<int, std::vector<int>> old_points_of_cell;  // only the cells that have new points
+  // The old points of the cells that have new points, by cell in increasing point order (a flag per cell, not a
+  // hash map: the lookups run over every old point).
+  int cells = 0;
+  for (int q = 0; q < now.size(); ++q) cells = std::max(cells, now.cells[q] + 1);
+  std::vector<char> has_new_points(cells, 0);
   for (int q = 0; q < now.size(); ++q)
-    if (same[q] < 0) old_points_of_cell[now.cells[q]];
-  for (int q = 0; q < before.size(); ++q)
-    if (const auto it = old_points_of_cell.find(before.cells[q]); it != old_points_of_cell.end()) it->second.push_back(q);
+    if (same[q] < 0) has_new_points[now.cells[q]] = 1;
+  std::unordered_map<int, std::vector<int>> old_points_of_cell;
+  for (int q = 0; q < before.size(); ++q) {
+    const int c = before.cells[q];
+    if (c < cells && has_new_points[c]) old_points_of_cell[c].push_back(q);
+  }
   for (int q = 0; q < now.size(); ++q) {
     if (same[q] >= 0) {
       carried[q] = states[same[q]];
       continue;
     }
     double best = std::numeric_limits<double>::infinity();
-    for (int old : old_points_of_cell.at(now.cells[q])) {
+    for (int old : old_points_of_cell[now.cells[q]]) {
       const double d = (before.points.row(old) - now.points.row(q)).squaredNorm();
       if (d < best) {
         best = d;
@@ -265,59 +313,112 @@ std::vector<core::KelvinState> carried_history(const ShapeTable& before, const s
   return carried;
 }
 
+/// Adds sign times the terms of the given rows to the sums of the VCI correction (EfgModel::build_couplings):
+/// defect_i = sum_surface w phi_i n - sum_volume w grad phi_i, support_i = sum_volume w. `surface` is false for
+/// rows of the volume table.
+void add_divergence_terms(const ShapeTable& table, bool surface, const std::vector<int>& rows, double sign,
+                          Eigen::Matrix3Xd* defect, Eigen::VectorXd* support) {
+  for (int q : rows)
+    for (int s = table.begin(q); s < table.end(q); ++s) {
+      const int i = table.nodes[s];
+      if (surface) {
+        defect->col(i) += sign * (table.weights[q] * table.phi[s] * table.normals.col(q));
+      } else {
+        defect->col(i) -= sign * (table.weights[q] * table.dphi.col(s));
+        (*support)[i] += sign * table.weights[q];
+      }
+    }
+}
+
+/// The rows of `before` that no point of the update reuses (reuse as given to update_shape_functions).
+std::vector<int> dropped_rows(const ShapeTable& before, const std::vector<int>& reuse) {
+  std::vector<char> kept(before.size(), 0);
+  for (int r : reuse)
+    if (r >= 0) kept[r] = 1;
+  std::vector<int> rows;
+  for (int q = 0; q < before.size(); ++q)
+    if (!kept[q]) rows.push_back(q);
+  return rows;
+}
+
+/// The old node lists of the points an update evaluates again (reuse[q] < 0) that are still there (same[q] >= 0, their
+/// row of `table` before the update), copied before the update overwrites the table: a re-evaluated point whose
+/// nodes are all among its old ones couples no node pair that the pattern lacks.
+struct OldNodeLists {
+  std::vector<int> offsets{0}, nodes;
+  std::vector<int> index;  // per point of the update: its list, or -1
+  OldNodeLists(const ShapeTable& table, const std::vector<int>& reuse, const std::vector<int>& same)
+      : index(reuse.size(), -1) {
+    for (std::size_t q = 0; q < reuse.size(); ++q) {
+      if (reuse[q] >= 0 || same[q] < 0) continue;
+      index[q] = static_cast<int>(offsets.size()) - 1;
+      nodes.insert(nodes.end(), table.nodes.begin() + table.begin(same[q]), table.nodes.begin() + table.end(same[q]));
+      offsets.push_back(static_cast<int>(nodes.size()));
+    }
+  }
+  /// The re-evaluated points of the updated `table` that may couple a node pair the pattern lacks: new points, and
+  /// those with a node they did not have (the rows' nodes are ascending).
+  std::vector<int> rows_with_new_nodes(const ShapeTable& table, const std::vector<int>& reuse) const {
+    std::vector<int> rows;
+    for (int q = 0; q < table.size(); ++q) {
+      if (reuse[q] >= 0) continue;
+      const int k = index[q];
+      if (k < 0 || !std::includes(nodes.begin() + offsets[k], nodes.begin() + offsets[k + 1],
+                                  table.nodes.begin() + table.begin(q), table.nodes.begin() + table.end(q)))
+        rows.push_back(q);
+    }
+    return rows;
+  }
+};
+
 }  // namespace
 
 /// What decides, under the enrichment, whether a point's weights change between two cuts. h_i(X) =
 /// (1 + sigma_i Phi(X)) / 2 for a node the cut modifies and 1 otherwise (eq. 32): node i enters only through
 /// whether it is modified and its side sigma_i, and the point only through Phi. So a point changes when a node
 /// whose (modified, sigma_i) changed covers it, or when Phi (or its gradient) changed and a node modified by either
-/// cut covers it. Both node sets are small next to the cloud, so a search over each alone is cheap.
+/// cut covers it. Either way a node modified by either cut covers it, and those nodes are few next to the cloud:
+/// one search over them alone answers both, and Phi is compared only at the points they cover.
 class NodesWithNewEnrichment {
  public:
   NodesWithNewEnrichment(const CutWeights& before, const CutWeights& after, const core::PointMatrix& nodes,
                          const SupportRadii& radii) {
-    std::vector<int> changed, modified;
-    for (int i = 0; i < nodes.rows(); ++i) {
-      if (before.modifies(i) || after.modifies(i)) modified.push_back(i);
-      if (before.modifies(i) != after.modifies(i) || (after.modifies(i) && before.node_side(i) != after.node_side(i)))
-        changed.push_back(i);
+    std::vector<int> modified;
+    for (int i = 0; i < nodes.rows(); ++i)
+      if (before.modifies(i) || after.modifies(i)) {
+        modified.push_back(i);
+        changed_.push_back(before.modifies(i) != after.modifies(i) ||
+                           (after.modifies(i) && before.node_side(i) != after.node_side(i)));
+      }
+    positions_.resize(static_cast<Eigen::Index>(modified.size()), 3);
+    radii_.resize(static_cast<Eigen::Index>(modified.size()));
+    for (std::size_t k = 0; k < modified.size(); ++k) {
+      positions_.row(k) = nodes.row(modified[k]);
+      radii_[k] = radii.radius(modified[k]);
     }
-    changed_ = std::make_unique<Subset>(changed, nodes, radii);
-    modified_ = std::make_unique<Subset>(modified, nodes, radii);
+    if (modified.empty()) return;
+    max_radius_ = radii_.maxCoeff();
+    search_ = std::make_unique<NodeSearch>(positions_);
   }
-  /// True when a node whose enrichment data changed covers x.
-  bool changed_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
-    return changed_->covers(x, hits);
-  }
-  /// True when a node modified by either cut covers x.
+  /// True when a node modified by either cut covers x; `hits` then lists them (as rows of this set).
   bool modified_node_covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
-    return modified_->covers(x, hits);
+    if (!search_) return false;
+    search_->covering(x, radii_, max_radius_, hits);
+    return !hits->empty();
+  }
+  /// True when one of `hits` (of modified_node_covers) is a node whose enrichment data changed.
+  bool changed_among(const std::vector<NodeHit>& hits) const {
+    for (const NodeHit& hit : hits)
+      if (changed_[hit.node]) return true;
+    return false;
   }
 
  private:
-  /// Some of the nodes, with their radii and a KD-tree over them (which references `positions`).
-  struct Subset {
-    core::PointMatrix positions;
-    Eigen::VectorXd radii;
-    double max_radius = 0.0;
-    std::unique_ptr<NodeSearch> search;
-    Subset(const std::vector<int>& ids, const core::PointMatrix& nodes, const SupportRadii& all)
-        : positions(static_cast<Eigen::Index>(ids.size()), 3), radii(static_cast<Eigen::Index>(ids.size())) {
-      for (std::size_t k = 0; k < ids.size(); ++k) {
-        positions.row(k) = nodes.row(ids[k]);
-        radii[k] = all.radius(ids[k]);
-      }
-      if (ids.empty()) return;
-      max_radius = radii.maxCoeff();
-      search = std::make_unique<NodeSearch>(positions);
-    }
-    bool covers(const Eigen::Vector3d& x, std::vector<NodeHit>* hits) const {
-      if (!search) return false;
-      search->covering(x, radii, max_radius, hits);
-      return !hits->empty();
-    }
-  };
-  std::unique_ptr<Subset> changed_, modified_;
+  core::PointMatrix positions_;  // the modified nodes; the KD-tree references it
+  Eigen::VectorXd radii_;
+  std::vector<char> changed_;
+  double max_radius_ = 0.0;
+  std::unique_ptr<NodeSearch> search_;
 };
 
 bool EfgModel::weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
@@ -325,14 +426,15 @@ bool EfgModel::weights_changed(const CutWeights* before, const Eigen::Vector3d& 
   constexpr double kTolerance = 1e-13;  // round-off of h and of rho * grad h
   if (enrichment) {
     // h_i = (1 + sigma_i Phi) / 2: the weights of unchanged nodes move with Phi alone (and their gradients with
-    // grad Phi / 2, compared at the largest radius, as below).
+    // grad Phi / 2, compared at the largest radius, as below). Nothing changes where no modified node reaches.
+    if (!enrichment->modified_node_covers(x, hits)) return false;
+    if (enrichment->changed_among(*hits)) return true;
     const CutWeights& after = *cut_weights_;
     Eigen::Vector3d g0, g1;
     const double phi0 = before->enrichment_function(x, side, gradients ? &g0 : nullptr);
     const double phi1 = after.enrichment_function(x, side, gradients ? &g1 : nullptr);
-    if (0.5 * std::abs(phi1 - phi0) > kTolerance || (gradients && 0.5 * radii_->max_radius() * (g1 - g0).norm() > kTolerance))
-      return enrichment->modified_node_covers(x, hits);
-    return enrichment->changed_node_covers(x, hits);
+    return 0.5 * std::abs(phi1 - phi0) > kTolerance ||
+           (gradients && 0.5 * radii_->max_radius() * (g1 - g0).norm() > kTolerance);
   }
   search_->covering(x, radii_->radii(), radii_->max_radius(), hits);
   const CutWeights* after = cut_weights_.get();
@@ -387,7 +489,10 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
       thread_local std::vector<NodeHit> hits;
       if (reuse[q] < 0) return;
       const Eigen::Vector3d x = points.points.row(q).transpose();
-      const bool near = may_be_near(x) && (cut.frame(x).distance < reach ||
+      // Under the enrichment the search over the modified nodes is itself the test of nearness (a node modified
+      // by a cut is nearer to it than its radius, so the points it covers are within 2 rho_max): the distances to
+      // the cuts (two frames per point) are not needed.
+      const bool near = may_be_near(x) && (enrichment || cut.frame(x).distance < reach ||
                                            (previous_cut && previous_cut->frame(x).distance < reach));
       if (near && weights_changed(before.get(), x, points.sides[q], gradients, &hits, enrichment.get()))
         changed[q] = 1;
@@ -400,14 +505,21 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   };
   const std::vector<int> volume_same = match_points(volume_, vq);
   const std::vector<int> volume_reuse = reuse_of(volume_same, vq, true, &report.volume_points_recomputed);
-  const std::vector<int> surface_reuse =
-      reuse_of(match_points(surface_, sq), sq, false, &report.boundary_points_recomputed);
+  const std::vector<int> surface_same = match_points(surface_, sq);
+  const std::vector<int> surface_reuse = reuse_of(surface_same, sq, false, &report.boundary_points_recomputed);
   report.volume_points = vq.size();
   report.boundary_points = sq.size();
 
   // History (eqs. 15-16): a point that is still there keeps its state; a new point (a cell split differently)
   // takes the state of the nearest old point of the same cell.
   std::vector<core::KelvinState> states = carried_history(volume_, states_, vq, volume_same);
+
+  // Read from the tables before the update changes them: the terms of the rows it drops leave the VCI sums, and the
+  // old node lists of the points it evaluates again tell which of them can couple a new node pair.
+  add_divergence_terms(volume_, false, dropped_rows(volume_, volume_reuse), -1.0, &defect_, &support_volume_);
+  add_divergence_terms(surface_, true, dropped_rows(surface_, surface_reuse), -1.0, &defect_, &support_volume_);
+  const OldNodeLists volume_old_nodes(volume_, volume_reuse, volume_same);
+  const OldNodeLists surface_old_nodes(surface_, surface_reuse, surface_same);
 
   report.quadrature_seconds = seconds_since(t0);
   const auto t1 = std::chrono::steady_clock::now();
@@ -421,19 +533,34 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   const auto t2 = std::chrono::steady_clock::now();
   // The incidence follows the tables: merged from the one before when the kept rows stayed in their slots.
   const int n = problem_.mesh.num_vertices();
-  volume_incidence_ = volume_packed ? NodeIncidence(volume_, n) : NodeIncidence(volume_incidence_, volume_, volume_reuse);
-  surface_incidence_ =
-      surface_packed ? NodeIncidence(surface_, n) : NodeIncidence(surface_incidence_, surface_, surface_reuse);
-  auto recomputed_rows = [](const std::vector<int>& reuse) {
+  // The merged incidence is written into the arrays of the one before last (kept for this), so that the update does
+  // not allocate (and fault in) 70 MB afresh on the lung.
+  auto follow = [n](const ShapeTable& table, bool packed, const std::vector<int>& reuse, NodeIncidence* incidence,
+                    NodeIncidence* spare) {
+    if (packed) {
+      *incidence = NodeIncidence(table, n);
+      return;
+    }
+    merge_incidence(*incidence, table, reuse, spare);
+    std::swap(*incidence, *spare);
+  };
+  follow(volume_, volume_packed, volume_reuse, &volume_incidence_, &spare_volume_incidence_);
+  follow(surface_, surface_packed, surface_reuse, &surface_incidence_, &spare_surface_incidence_);
+  auto evaluated_rows = [](const std::vector<int>& reuse) {
     std::vector<int> rows;
     for (int q = 0; q < static_cast<int>(reuse.size()); ++q)
       if (reuse[q] < 0) rows.push_back(q);
     return rows;
   };
-  report.pairs_added = sparsity_->add_pairs(volume_, recomputed_rows(volume_reuse)) +
-                       sparsity_->add_pairs(surface_, recomputed_rows(surface_reuse));
+  add_divergence_terms(volume_, false, evaluated_rows(volume_reuse), 1.0, &defect_, &support_volume_);
+  add_divergence_terms(surface_, true, evaluated_rows(surface_reuse), 1.0, &defect_, &support_volume_);
+  int first_row = n;  // the first node whose row of the pattern gained a pair
+  report.pairs_added = sparsity_->add_pairs(volume_, volume_old_nodes.rows_with_new_nodes(volume_, volume_reuse), &first_row) +
+                       sparsity_->add_pairs(surface_, surface_old_nodes.rows_with_new_nodes(surface_, surface_reuse), &first_row);
   if (report.pairs_added > 0) {
-    sparsity_->refill_matrix(&matrix_);  // in the spare room kept at set-up
+    // In the spare room kept at set-up, rewriting only the rows from the first that changed (the values are
+    // assembled before the next solve).
+    sparsity_->refill_matrix(&matrix_, first_row);
     // A solver's symbolic analysis (UMFPACK's ordering) belongs to the old pattern: start a solver of the method
     // chosen at set-up afresh. Without new pairs the kept solver reuses its analysis.
     EfgOptions chosen = options_;

@@ -192,11 +192,12 @@ class EfgModel {
   /// Everything that follows from the tabulated points and their incidence (the caller builds it): sparsity,
   /// boundary terms, VCI, statistics.
   /// Without new_pattern the sparsity pattern, the matrix storage and the linear solver's choice stay as they
-  /// are: the caller made sure the pattern holds every node pair of the tables (advance_cut).
+  /// are: the caller made sure the pattern holds every node pair of the tables, and brought the VCI sums (defect_,
+  /// support_volume_) up to date with the rows it changed (advance_cut).
   void build_couplings(bool new_pattern);
   /// True when a node covering x has a different weight (or gradient) under `before` than under the current cut.
-  /// With `enrichment` (both cuts enriched alike) the test compares Phi and looks only at the nodes whose
-  /// enrichment data changed; otherwise it evaluates every covering node.
+  /// With `enrichment` (both cuts enriched alike) the test searches only the nodes modified by either cut, and
+  /// compares Phi where one of them covers x; otherwise it evaluates every covering node.
   bool weights_changed(const CutWeights* before, const Eigen::Vector3d& x, int side, bool gradients,
                        std::vector<NodeHit>* hits, const NodesWithNewEnrichment* enrichment) const;
 
@@ -211,9 +212,15 @@ class EfgModel {
   std::unique_ptr<CutWeights> cut_weights_;
   ShapeTable volume_, surface_;
   NodeIncidence volume_incidence_, surface_incidence_;
+  // The arrays of the incidences before the last local update of the cut, reused by the next (advance_cut).
+  NodeIncidence spare_volume_incidence_, spare_surface_incidence_;
   std::unique_ptr<NodalSparsity> sparsity_;
   BoundaryTerms boundary_;
   Eigen::Matrix3Xd vci_correction_;  // 3 by N, xi_i added to test-function gradients
+  // The sums behind it: oint phi_i n - int grad phi_i [m^2] and int_{supp i} 1 [m^3], per node; kept so that a local
+  // update of the cut corrects them by the rows it changes.
+  Eigen::Matrix3Xd defect_;
+  Eigen::VectorXd support_volume_;
   double divergence_defect_ = 0.0;
 
   std::vector<core::KelvinState> states_;   // history at t_n, one per volume point

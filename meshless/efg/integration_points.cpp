@@ -295,10 +295,20 @@ NodeIncidence::NodeIncidence(const ShapeTable& table, int num_nodes) : num_point
 }
 
 NodeIncidence::NodeIncidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse) {
+  merge_incidence(before, table, reuse, this);
+}
+
+void merge_incidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse,
+                     NodeIncidence* merged) {
+  if (merged == &before) throw std::invalid_argument("merge_incidence: the result must not be the incidence before");
+  NodeIncidence& out = *merged;
+  std::vector<int>& offsets = out.offsets;
+  std::vector<int>& slots = out.slots;
+  std::vector<int>& points = out.points;
   const int num_nodes = static_cast<int>(before.offsets.size()) - 1;
   const int nq = table.size();
   const int old_points = before.num_points;
-  num_points = nq;
+  out.num_points = nq;
   std::vector<int> new_of_old(old_points, -1), evaluated;
   int last = -1;
   for (int q = 0; q < nq; ++q) {
@@ -307,7 +317,7 @@ NodeIncidence::NodeIncidence(const NodeIncidence& before, const ShapeTable& tabl
       continue;
     }
     if (reuse[q] <= last) {  // kept rows out of order: the merge below would not sort them
-      *this = NodeIncidence(table, num_nodes);
+      out = NodeIncidence(table, num_nodes);
       return;
     }
     last = reuse[q];

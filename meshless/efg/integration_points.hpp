@@ -112,4 +112,9 @@ struct NodeIncidence {
   NodeIncidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse);
 };
 
+/// The same as NodeIncidence(before, table, reuse), written into `merged` (not `before`), whose arrays are reused
+/// when they are large enough: a local update that keeps the incidence before last for this allocates nothing.
+void merge_incidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse,
+                     NodeIncidence* merged);
+
 }  // namespace meshless

@@ -42,7 +42,7 @@ NodalSparsity::NodalSparsity(int num_nodes, const std::vector<const ShapeTable*>
   for (int i = 0; i < num_nodes; ++i) std::copy(rows[i].begin(), rows[i].end(), columns_.begin() + row_offsets_[i]);
 }
 
-long long NodalSparsity::add_pairs(const ShapeTable& table, const std::vector<int>& points) {
+long long NodalSparsity::add_pairs(const ShapeTable& table, const std::vector<int>& points, int* first_row) {
   const int n = num_nodes();
   // The given points of each node (a small incidence), then node by node: mark the row, and every node of those
   // points that is not marked is a missing pair. O(1) per pair tested.
@@ -81,19 +81,34 @@ long long NodalSparsity::add_pairs(const ShapeTable& table, const std::vector<in
   if (missing.empty()) return 0;
   std::sort(missing.begin(), missing.end());
 
-  // Merge row by row: the new pairs are few, so this is a copy of the pattern.
-  std::vector<int> merged_offsets(n + 1, 0), merged_columns, extra;
-  merged_columns.reserve(columns_.size() + missing.size());
-  auto next = missing.begin();
-  for (int i = 0; i < n; ++i) {
-    extra.clear();
-    for (; next != missing.end() && next->first == i; ++next) extra.push_back(next->second);
-    std::merge(columns_.begin() + row_offsets_[i], columns_.begin() + row_offsets_[i + 1], extra.begin(), extra.end(),
-               std::back_inserter(merged_columns));
-    merged_offsets[i + 1] = static_cast<int>(merged_columns.size());
+  // Merged in place, from the last row back to the first that gains a pair: a row moves up by the number of pairs
+  // added before its end, so its new slots lie at or after its old ones, and a backward merge never overwrites an
+  // entry it has still to read. The rows before the first new pair stay where they are. The capacity grows with
+  // room to spare, so that later updates add their pairs without a copy.
+  const std::size_t old_size = columns_.size();
+  if (columns_.capacity() < old_size + missing.size()) columns_.reserve(old_size + missing.size() + old_size / 100);
+  columns_.resize(old_size + missing.size());
+  const int first = missing.front().first;
+  std::vector<int> merged_offsets(row_offsets_);
+  {
+    auto next = missing.begin();
+    int added = 0;
+    for (int i = first; i < n; ++i) {
+      for (; next != missing.end() && next->first == i; ++next) ++added;
+      merged_offsets[i + 1] = row_offsets_[i + 1] + added;
+    }
+  }
+  auto extra = missing.rbegin();
+  for (int i = n - 1; i >= first; --i) {
+    int from = row_offsets_[i + 1] - 1, to = merged_offsets[i + 1] - 1;
+    for (; to >= merged_offsets[i]; --to) {
+      const bool take_extra =
+          extra != missing.rend() && extra->first == i && (from < row_offsets_[i] || extra->second > columns_[from]);
+      columns_[to] = take_extra ? (extra++)->second : columns_[from--];
+    }
   }
   row_offsets_ = std::move(merged_offsets);
-  columns_ = std::move(merged_columns);
+  if (first_row) *first_row = std::min(*first_row, first);
   return static_cast<long long>(missing.size());
 }
 
@@ -105,18 +120,24 @@ SparseMatrix NodalSparsity::make_matrix(double spare_fraction) const {
   return m;
 }
 
-void NodalSparsity::refill_matrix(SparseMatrix* matrix) const {
+void NodalSparsity::refill_matrix(SparseMatrix* matrix, int from_node) const {
   const int n = num_nodes();
   const long long nnz = 9LL * static_cast<long long>(columns_.size());
   if (nnz > 2147483647LL) throw std::length_error("NodalSparsity: more than 2^31 non-zeros");
   SparseMatrix& m = *matrix;
-  m.resize(3 * n, 3 * n);  // keeps the value and index arrays, empty
-  m.resizeNonZeros(static_cast<Eigen::Index>(nnz));  // reallocates only when they are too small
+  if (from_node > 0 && m.rows() == 3 * n && m.cols() == 3 * n && m.isCompressed() &&
+      m.data().allocatedSize() >= static_cast<Eigen::Index>(nnz)) {
+    m.resizeNonZeros(static_cast<Eigen::Index>(nnz));  // within the allocation: the rows before from_node stay
+  } else {
+    from_node = 0;
+    m.resize(3 * n, 3 * n);  // keeps the value and index arrays, empty
+    m.resizeNonZeros(static_cast<Eigen::Index>(nnz));  // reallocates only when they are too small
+  }
   int* outer = m.outerIndexPtr();
   int* inner = m.innerIndexPtr();
   double* values = m.valuePtr();
 #pragma omp parallel for schedule(dynamic, 256)
-  for (int i = 0; i < n; ++i) {
+  for (int i = from_node; i < n; ++i) {
     const int len = row_length(i);
     for (int a = 0; a < 3; ++a) {
       const long long start = value_index(i, a, 0, 0);

@@ -30,14 +30,18 @@ class NodalSparsity {
   /// returns how many block entries were added (both (i, j) and (j, i) count). A cut that advances mostly
   /// removes couplings, so the local update keeps the pattern of the shorter cut and adds the few pairs that
   /// only the new points couple (a cell split differently, a new lip point); the pairs in excess are assembled
-  /// as zeros.
-  long long add_pairs(const ShapeTable& table, const std::vector<int>& points);
+  /// as zeros. The rows are merged in place (the rows before the first that gains a pair do not move); when
+  /// first_row is not null it is lowered to that row, if any pair was added.
+  long long add_pairs(const ShapeTable& table, const std::vector<int>& points, int* first_row = nullptr);
 
   /// A 3N by 3N row-major matrix with this pattern and zero values, with its value and index arrays allocated
   /// for spare_fraction more entries (room for add_pairs(), filled by refill_matrix() without a new allocation).
   SparseMatrix make_matrix(double spare_fraction = 0.0) const;
   /// Give `m` this pattern and zero values, in its own arrays when they have room (else they are reallocated).
-  void refill_matrix(SparseMatrix* m) const;
+  /// With from_node > 0, `m` already holds this pattern's rows of the nodes before from_node (the pattern changed
+  /// only from there on, add_pairs' first_row): when its arrays have room, only the later rows are written (zero
+  /// values), and the earlier ones keep their values; otherwise the whole matrix is refilled.
+  void refill_matrix(SparseMatrix* m, int from_node = 0) const;
   /// The N by N node-pair pattern as a compressed column-major matrix with 64-bit indices (values zero):
   /// what an ordering analyses instead of the 9x larger DOF pattern. The pattern is symmetric, so the CSR
   /// arrays serve as CSC arrays.
