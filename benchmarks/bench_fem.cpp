@@ -26,7 +26,7 @@
 #include "benchmarks/mpi_benchmark_main.hpp"
 #include "core/case.hpp"
 #include "core/geometry.hpp"
-#include "reference_fem/block_benchmark.hpp"
+#include "benchmarks/block_benchmark.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace {

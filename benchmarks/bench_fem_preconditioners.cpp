@@ -17,8 +17,8 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "reference_fem/fem_model.hpp"
-#include "reference_fem/geometry_broadcast.hpp"
-#include "reference_fem/preconditioner_study.hpp"
+#include "core/geometry_broadcast.hpp"
+#include "benchmarks/preconditioner_study.hpp"
 
 namespace {
 
@@ -37,7 +37,7 @@ const LungSystem& lung_small() {
     core::GeometryOptions options;
     options.build_node_cloud = false;
     options.fem_mesh_size = (size ? std::atof(size) : 12.0) * 1e-3;
-    system->geometry = reference_fem::build_on_rank_zero(
+    system->geometry = core::build_on_rank_zero(
         [&] { return core::build_geometry(system->c, options); }, MPI_COMM_WORLD);
     system->problem = reference_fem::problem_from_case(system->c, system->geometry.fem_mesh);
   }

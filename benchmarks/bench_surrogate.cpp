@@ -10,7 +10,7 @@
 //    one patch load up to the response step on a set-up model (EfgModel::restart + time steps +
 //    interpolation). For `shipped` the case named in TISSUE_SURROGATE_CASE (default
 //    configs/lung_surrogate.json) is meshed first.
-//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (meshless/surrogate/surrogate_box_case.hpp),
+//  * BM_SurrogateTraining/box: training + fitting of the box surrogate (tests/surrogate_box_case.hpp),
 //  with the
 //    file size.
 #include <benchmark/benchmark.h>
@@ -28,7 +28,7 @@
 #include "core/geometry.hpp"
 #include "meshless/efg/efg_model.hpp"
 #include "meshless/surrogate/surrogate.hpp"
-#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "tests/surrogate_box_case.hpp"
 #include "meshless/surrogate/surrogate_builder.hpp"
 #include "meshless/surrogate/surrogate_file.hpp"
 

@@ -2,6 +2,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -171,6 +172,30 @@ OutputSpec read_output(const std::optional<JsonReader>& r) {
   return o;
 }
 
+CompareSpec read_compare(const std::optional<JsonReader>& r) {
+  CompareSpec spec;
+  if (!r) return spec;
+  spec.reference = r->string("reference", spec.reference);
+  if (r->has("models")) {
+    const nlohmann::json& list = r->array("models", 1, "a non-empty array of model names, e.g. [\"enrichment\", "
+                                                       "\"visibility\"]");
+    spec.models.clear();
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string at = fmt::format("models/{}", i);
+      if (!list[i].is_string() || list[i].get<std::string>().empty())
+        r->fail(at, "a model name (a non-empty string), got " + describe_json(list[i]));
+      const std::string name = list[i].get<std::string>();
+      if (name == spec.reference)
+        r->fail(at, fmt::format("a model other than the reference \"{}\" (it is scored against itself)", name));
+      if (std::find(spec.models.begin(), spec.models.end(), name) != spec.models.end())
+        r->fail(at, fmt::format("each model once (\"{}\" is listed twice)", name));
+      spec.models.push_back(name);
+    }
+  }
+  r->finish();
+  return spec;
+}
+
 SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec& load) {
   SurrogateSpec s;
   s.contact_points = {load.point};
@@ -247,6 +272,7 @@ Case parse_case(const nlohmann::json& document, const std::string& file) {
   c.fem = read_fem(root.optional_object("fem"));
   c.output = read_output(root.optional_object("output"));
   c.surrogate = read_surrogate(root.optional_object("surrogate"), c.load);
+  c.compare = read_compare(root.optional_object("compare"));
   root.finish();
   return c;
 }

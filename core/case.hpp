@@ -180,6 +180,16 @@ struct SurrogateSpec {
   int holdout_forces = 2;        ///< full solves at untrained forces, to report the surrogate's error
 };
 
+/// Which models `tissue compare`, `reproduce` and `sweep` run on the case (docs/CONFIG.md, /compare). The names are
+/// those of experiments/models/model_registry.cpp; core only checks their form, the comparator checks that each is
+/// registered (CaseError at /compare/models/i naming the registered ones).
+struct CompareSpec {
+  std::string reference = "fem";  ///< the model every other is scored against
+  /// The scored models, in the order of every table's columns. Default: the proposed model and the baseline of the
+  /// paper's Table 1.
+  std::vector<std::string> models = {"enrichment", "visibility"};
+};
+
 struct Case {
   std::string name;
   std::string description;
@@ -196,6 +206,7 @@ struct Case {
   FemSpec fem;
   OutputSpec output;
   SurrogateSpec surrogate;  ///< defaults when the case has no /surrogate
+  CompareSpec compare;      ///< defaults when the case has no /compare
 };
 
 /// Read and validate a case file. Throws CaseError (file, JSON path, what was expected).

@@ -9,17 +9,17 @@
 #include <iostream>
 
 #include "core/case_error.hpp"
-#include "experiments/case_commands.hpp"
-#include "experiments/fit_commands.hpp"
-#include "experiments/probe_commands.hpp"
-#include "experiments/compare_command.hpp"
-#include "experiments/export_command.hpp"
-#include "experiments/progress.hpp"
-#include "experiments/reproduce_command.hpp"
-#include "experiments/rsr_command.hpp"
-#include "experiments/solve_commands.hpp"
-#include "experiments/sweep_command.hpp"
-#include "experiments/verify_commands.hpp"
+#include "experiments/commands/case_commands.hpp"
+#include "experiments/commands/fit_commands.hpp"
+#include "experiments/commands/probe_commands.hpp"
+#include "experiments/commands/compare_command.hpp"
+#include "experiments/commands/export_command.hpp"
+#include "experiments/io/progress.hpp"
+#include "experiments/commands/reproduce_command.hpp"
+#include "experiments/commands/rsr_command.hpp"
+#include "experiments/commands/solve_commands.hpp"
+#include "experiments/commands/sweep_command.hpp"
+#include "experiments/commands/verify_commands.hpp"
 
 int main(int argc, char** argv) {
   // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's PETSc Krylov

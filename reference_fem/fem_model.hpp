@@ -3,7 +3,7 @@
 // call. deal.II-free header.
 //
 // MPI: the solve is collective over FemRunOptions::communicator. Every process passes the same mesh, case
-// and options (reference_fem/geometry_broadcast.hpp sends rank 0's geometry); the mesh is partitioned, each
+// and options (core/geometry_broadcast.hpp sends rank 0's geometry); the mesh is partitioned, each
 // process assembles and keeps the history of its own cells, and every process gets the same FemRunResult.
 #include <mpi.h>
 

@@ -3,8 +3,8 @@
 
 Usage: plot_sweep.py SUMMARY_CSV OUT_PNG --x POINTER [--title TITLE]
 
-Left: the eq. 34 RMSE of both meshless variants against the FEM reference; right: the wall time of each
-model. With more than one swept parameter, one line per combination of the others. Needs Debian's
+Left: the eq. 34 RMSE of each scored model (the columns MODEL_rmse_mm) against the reference; right: the wall
+time of each model (fem_seconds is the reference's). With more than one swept parameter, one line per combination of the others. Needs Debian's
 python3-matplotlib (scripts/install_dependencies.sh).
 """
 import argparse
@@ -17,6 +17,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 FIXED = {"run_id", "status"}
+STYLES = ["o-", "s--", "^:", "d-.", "v--", "x:"]
 
 
 def main():
@@ -30,6 +31,7 @@ def main():
         reader = csv.DictReader(f)
         rows = [r for r in reader if r["status"] == "ok"]
         parameters = [c for c in reader.fieldnames if c.startswith("/")]
+        models = [c[: -len("_rmse_mm")] for c in reader.fieldnames if c.endswith("_rmse_mm")]
     if args.x not in parameters:
         sys.exit(f"{args.summary_csv}: no parameter column {args.x}")
     others = [p for p in parameters if p != args.x]
@@ -50,12 +52,12 @@ def main():
         def values(column):
             return [float(r[column]) if r[column] else float("nan") for r in group]
 
-        ax_rmse.plot(xs, values("enrichment_rmse_mm"), "s--", label="enrichment" + suffix)
-        ax_rmse.plot(xs, values("visibility_rmse_mm"), "^:", label="visibility" + suffix)
-        for model, style in (("fem", "o-"), ("enrichment", "s--"), ("visibility", "^:")):
-            ax_time.plot(xs, values(f"{model}_seconds"), style, label=model + suffix)
+        for k, model in enumerate(models):
+            ax_rmse.plot(xs, values(f"{model}_rmse_mm"), STYLES[(k + 1) % len(STYLES)], label=model + suffix)
+        for k, model in enumerate(["fem"] + models):
+            ax_time.plot(xs, values(f"{model}_seconds"), STYLES[k % len(STYLES)], label=model + suffix)
     ax_rmse.set_xlabel(args.x)
-    ax_rmse.set_ylabel("RMSE against the FEM reference [mm] (eq. 34)")
+    ax_rmse.set_ylabel("RMSE against the reference [mm] (eq. 34)")
     ax_rmse.set_ylim(bottom=0)
     ax_time.set_xlabel(args.x)
     ax_time.set_ylabel("wall time of the model [s]")

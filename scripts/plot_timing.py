@@ -17,8 +17,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-MODELS = [("meshless", "meshless, full solve (enrichment)", "tab:blue"), ("fem", "FEM reference", "black"),
-          ("surrogate", "surrogate query (Levenberg-Marquardt fit)", "tab:orange")]
+COLOURS = ["black", "tab:blue", "tab:green", "tab:red", "tab:purple", "tab:brown"]
 
 
 def main():
@@ -26,12 +25,15 @@ def main():
         sys.exit(__doc__)
     with open(sys.argv[1]) as f:
         timing = json.load(f)
-    rows = timing["rows"]
+    # One bar per timed model (the timing case's /compare list, in its order), then the surrogate's query.
+    rows = [dict(r["models"], force_N=r["force_N"]) for r in timing["rows"]]
+    models = [(m["name"], f"{m['name']} ({m['role'].split(':')[0]}), full solve", COLOURS[k % len(COLOURS)])
+              for k, m in enumerate(timing["models"])]
     surrogate = timing.get("surrogate", {})
     if surrogate.get("status") == "measured":
         for r, s in zip(rows, surrogate["rows"]):
             r["surrogate"] = s
-    models = [m for m in MODELS if any(m[0] in r for r in rows)]
+        models.append(("surrogate", "surrogate query (Levenberg-Marquardt fit)", "tab:orange"))
     forces = [r["force_N"] for r in rows]
     width = 0.8 / len(models)
     fig, ax = plt.subplots(figsize=(8, 4.5))

@@ -18,7 +18,7 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/output_directory.hpp"
-#include "experiments/case_export.hpp"
+#include "experiments/export/case_export.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace experiments {

@@ -1,6 +1,6 @@
 // `tissue export` read back (label geometry, seconds): the exported mesh is the FEM reference's mesh raised to second
 // order, with the sets it claims, and the CalculiX deck's nodal forces sum to the case's force
-// (experiments/case_export.hpp, docs/FEM_REFERENCE.md "An independent FE code: CalculiX").
+// (experiments/export/case_export.hpp, docs/FEM_REFERENCE.md "An independent FE code: CalculiX").
 #include <gmsh.h>
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "core/geometry.hpp"
 #include "core/gmsh_session.hpp"
 #include "core/output_directory.hpp"
-#include "experiments/case_export.hpp"
+#include "experiments/export/case_export.hpp"
 
 namespace experiments {
 namespace {

@@ -13,10 +13,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "experiments/compare.hpp"
-#include "experiments/compare_metrics.hpp"
-#include "experiments/compare_subprocess.hpp"
-#include "experiments/mesh_study_estimate.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/comparator/compare_metrics.hpp"
+#include "experiments/io/child_process.hpp"
+#include "experiments/comparator/mesh_study_estimate.hpp"
 #include "tests/tissue_process.hpp"
 
 namespace fs = std::filesystem;
@@ -173,6 +173,8 @@ experiments::Comparison synthetic_comparison(bool identical_variants) {
   b = identical_variants ? a : ref * 0.5;
   c.reference = result_with(ref, 10.0);
   c.models = {{"enrichment", result_with(a, 4.0)}, {"visibility", result_with(b, 5.0)}};
+  c.models[0].second.role = "proposed: the synthetic proposed model";
+  c.models[1].second.role = "baseline: the synthetic baseline";
   c.rules.patch_edge_distance = 0.001;
   c.rules.cut_distance = 0.010;
   c.diagnostics =

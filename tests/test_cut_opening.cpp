@@ -1,4 +1,4 @@
-// A block with a crack under an opening (mode I) load (experiments/crack_opening.hpp): the meshless model's crack
+// A block with a crack under an opening (mode I) load (experiments/studies/crack_opening.hpp): the meshless model's crack
 // (enrichment and visibility, paper §4) against the FEM reference's duplicated-node crack. The cut is the same object
 // for both (core::RuledSurface); the opening u_y(+) - u_y(-) along the crack is compared with the FEM's peak.
 #include <gtest/gtest.h>
@@ -7,7 +7,7 @@
 #include <map>
 
 #include "core/case.hpp"
-#include "experiments/crack_opening.hpp"
+#include "experiments/studies/crack_opening.hpp"
 
 namespace experiments {
 namespace {

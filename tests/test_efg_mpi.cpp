@@ -15,7 +15,7 @@
 #include "meshless/efg/efg_model.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
 #include "meshless/verification/verification_problems.hpp"
-#include "reference_fem/geometry_broadcast.hpp"
+#include "core/geometry_broadcast.hpp"
 #include "tests/sheared_box_runs.hpp"
 
 namespace meshless {
@@ -77,11 +77,11 @@ TEST(EfgMpi, DistributedSolveRefusesADropToleranceAndSaysWhatToChange) {
 }
 
 TEST(EfgMpi, EveryProcessGetsRankZerosNodeCloud) {
-  // `mpirun -np N tissue solve meshless` meshes on rank 0 alone (reference_fem::build_on_rank_zero); every process
+  // `mpirun -np N tissue solve meshless` meshes on rank 0 alone (core::build_on_rank_zero); every process
   // must then build the same EFG model, so the node cloud must arrive whole: vertices, cells, faces and their tags.
   if (petsc_processes() != 2) GTEST_FAIL() << kRunOnTwoProcesses;
   const EfgProblem box = sheared_box_problem(4);
-  const core::Geometry g = reference_fem::build_on_rank_zero(
+  const core::Geometry g = core::build_on_rank_zero(
       [&] {
         core::Geometry built;
         built.meshless_mesh = box.mesh;

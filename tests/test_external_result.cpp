@@ -14,9 +14,10 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "experiments/compare.hpp"
-#include "experiments/external_result.hpp"
-#include "experiments/model_result.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/models/external/external_result.hpp"
+#include "experiments/models/model_registry.hpp"
+#include "experiments/models/model_result.hpp"
 #include "tests/tissue_process.hpp"
 
 namespace fs = std::filesystem;
@@ -109,6 +110,8 @@ experiments::Comparison comparison_with(experiments::ModelResult external) {
   experiments::ModelResult enrichment, visibility;
   enrichment.sample_displacements = c.reference.sample_displacements * 0.9;
   visibility.sample_displacements = c.reference.sample_displacements * 0.5;
+  enrichment.role = "proposed";
+  visibility.role = "baseline";
   c.models = {{"enrichment", enrichment}, {"visibility", visibility}, {"other", std::move(external)}};
   c.rules.patch_edge_distance = 0.001;
   c.rules.cut_distance = 0.010;
@@ -311,7 +314,7 @@ TEST_F(ExternalResult, RefusesABadName) {
 
   const auto names_refusal = [](const std::vector<experiments::ExternalSpec>& specs) -> std::string {
     try {
-      experiments::check_external_names(specs, experiments::builtin_model_names());
+      experiments::check_external_names(specs, experiments::registered_model_names());
     } catch (const ExternalResultError& e) {
       return e.what();
     }
@@ -319,7 +322,7 @@ TEST_F(ExternalResult, RefusesABadName) {
   };
   EXPECT_HAS(names_refusal({{"Visibility", "v.csv"}}),
              "--external Visibility=v.csv: NAME \"Visibility\" is a built-in model's name; expected another name (the "
-             "built-in models are fem, enrichment, visibility)");
+             "built-in models are fem, enrichment, visibility, zero)");
   EXPECT_HAS(names_refusal({{"ccx", "a.csv"}, {"abaqus", "b.csv"}, {"ccx", "c.csv"}}),
              "--external ccx=c.csv: NAME \"ccx\" is given twice (also as --external ccx=a.csv)");
   EXPECT_EQ(names_refusal({{"ccx", "a.csv"}, {"abaqus", "a.csv"}}), "accepted");

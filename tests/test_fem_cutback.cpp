@@ -10,7 +10,7 @@
 
 #include "core/inadmissible_strain.hpp"
 #include "core/step_cutback.hpp"
-#include "experiments/model_result.hpp"
+#include "experiments/models/model_result.hpp"
 #include "meshless/verification/box_mesh.hpp"
 #include "reference_fem/fem_model.hpp"
 
@@ -109,7 +109,7 @@ TEST(FemCutback, HalvedStepEqualsPlainHalfStepsAtTheRequestedTimes) {
 
 TEST(FemCutback, TimingsJsonRecordsTheCutBackAndTheSmallestMargin) {
   // A cut-back step followed by a plain one, through timings_json (the per-step fields as `tissue solve fem`
-  // fills them in experiments/solve_commands.cpp).
+  // fills them in experiments/commands/solve_commands.cpp).
   const int limit = limit_where_only_half_steps_converge();
   const FemRunResult f = run(kPressure, {1.0, 1.05}, limit, 0.5);  // held longer, it creeps past the limit
   experiments::ModelResult r;

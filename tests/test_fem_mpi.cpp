@@ -14,7 +14,7 @@
 
 #include "core/crack_embedding.hpp"
 #include "reference_fem/fem_model.hpp"
-#include "reference_fem/geometry_broadcast.hpp"
+#include "core/geometry_broadcast.hpp"
 
 namespace reference_fem {
 namespace {
@@ -24,7 +24,7 @@ constexpr double kCutY = 0.01;
 
 /// The cracked block, meshed by Gmsh on rank 0 and sent to the others (as `tissue solve fem` does).
 core::Geometry cracked_block() {
-  return build_on_rank_zero(
+  return core::build_on_rank_zero(
       [] {
         const core::RuledSurface cut({Eigen::Vector3d(0.01, kCutY, kLz), Eigen::Vector3d(0.03, kCutY, kLz)},
                                      -Eigen::Vector3d::UnitZ(), 0.01);

@@ -1,4 +1,4 @@
-// The fixed-rate loop of the probe's replay (experiments/realtime_loop.hpp): the schedule's arithmetic, the
+// The fixed-rate loop of the probe's replay (experiments/studies/realtime_loop.hpp): the schedule's arithmetic, the
 // statistics it reports and the reporting of refused scheduling requests. No assertion on time: speed and
 // missed deadlines are measured by `tissue probe --trace` (docs/SURROGATE.md §7), never asserted here.
 #include <gtest/gtest.h>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/realtime_loop.hpp"
+#include "experiments/studies/realtime_loop.hpp"
 
 namespace experiments {
 namespace {

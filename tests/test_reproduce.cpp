@@ -10,7 +10,7 @@
 
 #include "core/case.hpp"
 #include "core/case_error.hpp"
-#include "experiments/reproduce.hpp"
+#include "experiments/studies/reproduce.hpp"
 
 namespace {
 

@@ -14,7 +14,7 @@
 #include <sstream>
 #include <string>
 
-#include "experiments/rsr.hpp"
+#include "experiments/studies/rsr.hpp"
 
 namespace fs = std::filesystem;
 

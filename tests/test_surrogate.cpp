@@ -19,9 +19,9 @@
 
 #include "meshless/verification/box_mesh.hpp"
 #include "meshless/efg/efg_model.hpp"
-#include "experiments/reproduce.hpp"
+#include "experiments/studies/reproduce.hpp"
 #include "meshless/surrogate/surrogate.hpp"
-#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "tests/surrogate_box_case.hpp"
 #include "meshless/surrogate/surrogate_builder.hpp"
 #include "meshless/surrogate/surrogate_cost_functions.hpp"
 #include "meshless/surrogate/surrogate_file.hpp"

@@ -1,5 +1,5 @@
 // The surrogate against the full meshless model at forces it was not trained on (paper §3; docs/SURROGATE.md
-// §6): on the box of meshless/surrogate/surrogate_box_case.hpp (405 nodes, lung material with k = 1), trained on 8
+// §6): on the box of tests/surrogate_box_case.hpp (405 nodes, lung material with k = 1), trained on 8
 // levels per axis, the RMSE over every surface node at two held-out forces (one between trained levels, one
 // oblique, which also tests the superposition of the axes) is at most 2 % of the full model's contact-node
 // displacement. About 20 s of CPU (26 full solves): label long.
@@ -7,7 +7,7 @@
 
 #include <iostream>
 
-#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "tests/surrogate_box_case.hpp"
 #include "meshless/surrogate/surrogate_builder.hpp"
 
 namespace meshless {

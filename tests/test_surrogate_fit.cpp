@@ -11,7 +11,7 @@
 #include <iostream>
 #include <random>
 
-#include "meshless/surrogate/surrogate_box_case.hpp"
+#include "tests/surrogate_box_case.hpp"
 #include "meshless/surrogate/surrogate_builder.hpp"
 #include "meshless/surrogate/surrogate_fit.hpp"
 #include "meshless/surrogate/surrogate_training.hpp"

@@ -15,8 +15,8 @@
 #include <sstream>
 
 #include "core/case_error.hpp"
-#include "experiments/compare.hpp"
-#include "experiments/sweep.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/studies/sweep.hpp"
 
 namespace fs = std::filesystem;
 using nlohmann::json;

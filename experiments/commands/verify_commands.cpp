@@ -1,0 +1,302 @@
+#include "experiments/commands/verify_commands.hpp"
+
+#include "experiments/comparator/mesh_study_estimate.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "core/output_directory.hpp"
+#include "experiments/models/efg/meshless_runs.hpp"
+#include "experiments/models/model_result.hpp"
+#include "experiments/io/progress.hpp"
+#include "reference_fem/fem_model.hpp"
+#include "reference_fem/verification.hpp"
+
+namespace experiments {
+namespace {
+
+struct VerifyFemOptions {
+  std::string out = "results/verify";
+  std::vector<std::string> configs{std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json",
+                                   std::string(TISSUE_SOURCE_DIR) + "/configs/lung_large.json"};
+  /// One refinement ratio (1.5) between four levels, through the shipped cases' 12 mm to 8 mm: the comparator takes
+  /// the reference's error bar at 12 mm from the 12 mm level's distance to the finest plus the finest level's
+  /// Richardson estimate, and can take the extrapolated samples as its reference (docs/EXPERIMENTS.md).
+  std::vector<double> sizes_mm{27.0, 18.0, 12.0, 8.0};
+  std::vector<int> cantilever_levels{1, 2, 4, 8};
+  double converged_change = 0.01;  ///< relative change of the sample displacements at the next level
+  bool skip_lung = false;
+};
+
+core::KelvinParameters bar_material(double nu) {
+  core::KelvinParameters p;
+  p.K1 = 2000.0;
+  p.K2 = 1000.0;
+  p.eta = 600.0;
+  p.nu = nu;
+  return p;
+}
+
+nlohmann::json verify_uniaxial(std::string* md) {
+  using reference_fem::kCreepTolerance;
+  using reference_fem::kRelaxationTolerance;
+  using reference_fem::kSupportDisplacementTolerance;
+  reference_fem::UniaxialOptions o;
+  o.material = bar_material(0.3);
+  o.end_time = 1.0;
+  o.steps = 20;
+  const auto relax = reference_fem::run_uniaxial_relaxation(o, 0.01);
+  o.material = bar_material(0.0);
+  o.end_time = 3.0;
+  o.steps = 150;
+  const auto creep = reference_fem::run_uniaxial_creep(o, 100.0);
+  constexpr double kSupportStiffness = 1000.0;  // Pa/m: sigma0 / k_s = 0.1 m, beside the 2 m bar's own stretch
+  const auto supported = reference_fem::run_uniaxial_creep_on_elastic_support(o, 100.0, kSupportStiffness);
+  const bool pass = relax.max_relative_error < kRelaxationTolerance && creep.max_relative_error < kCreepTolerance &&
+                    supported.max_relative_error < kCreepTolerance &&
+                    supported.max_support_relative_error < kSupportDisplacementTolerance;
+  auto row = [](const char* test, const char* steps, double error, double limit) {
+    return fmt::format("| {} | {} | {:.2e} | {:.0e} | {} |\n", test, steps, error, limit, error < limit ? "yes" : "NO");
+  };
+  *md += "## Uniaxial bar (standard linear solid, closed forms)\n\n| test | steps | max relative error | limit | pass |\n"
+         "|---|---|---|---|---|\n";
+  *md += row("relaxation, eps0 = 1 %, nu = 0.3, dt = tau/4", "1 + 20", relax.max_relative_error, kRelaxationTolerance);
+  *md += row("creep, sigma0 = 100 Pa, nu = 0, dt = tau/10", "1 + 150", creep.max_relative_error, kCreepTolerance);
+  *md += row("creep on an elastic support (k_s = 1000 Pa/m): strain", "1 + 150", supported.max_relative_error,
+             kCreepTolerance);
+  *md += row("creep on an elastic support: the support's displacement sigma0 / k_s", "1 + 150",
+             supported.max_support_relative_error, kSupportDisplacementTolerance);
+  *md += "\n";
+  return {{"relaxation",
+           {{"max_relative_error", relax.max_relative_error}, {"steps", 21}, {"nu", 0.3}, {"limit", kRelaxationTolerance}}},
+          {"creep", {{"max_relative_error", creep.max_relative_error}, {"steps", 151}, {"nu", 0.0}, {"limit", kCreepTolerance}}},
+          {"creep_on_elastic_support",
+           {{"max_relative_error", supported.max_relative_error},
+            {"max_support_displacement_relative_error", supported.max_support_relative_error},
+            {"support_stiffness_Pa_per_m", kSupportStiffness},
+            {"limits", {kCreepTolerance, kSupportDisplacementTolerance}}}},
+          {"pass", pass}};
+}
+
+nlohmann::json verify_cantilever(const VerifyFemOptions& opt, Progress* progress, std::string* md) {
+  reference_fem::CantileverOptions o;
+  std::vector<reference_fem::CantileverLevel> levels;
+  nlohmann::json rows = nlohmann::json::array();
+  *md += "## Cantilever vs Timoshenko beam (elastic limit, degree 2)\n\n| elements through depth | h [mm] | DOFs | "
+         "relative L2 error | tip deflection / exact | rate | time [s] |\n|---|---|---|---|---|---|---|\n";
+  for (int n : opt.cantilever_levels) {
+    progress->step(fmt::format("cantilever, {} elements through the depth", n));
+    levels.push_back(reference_fem::run_cantilever(o, n));
+    const auto& l = levels.back();
+    std::string rate = "";
+    if (levels.size() > 1) {
+      const auto& p = levels[levels.size() - 2];
+      rate = fmt::format("{:.2f}", std::log(p.l2_error / l.l2_error) / std::log(p.h / l.h));
+    }
+    *md += fmt::format("| {} | {:.2f} | {} | {:.3e} | {:.6f} | {} | {:.1f} |\n", n, l.h * 1e3, l.n_dofs, l.l2_error,
+                       l.tip_deflection / l.exact_tip_deflection, rate, l.seconds);
+    rows.push_back({{"subdivisions", n},
+                    {"h_mm", l.h * 1e3},
+                    {"n_dofs", l.n_dofs},
+                    {"relative_l2_error", l.l2_error},
+                    {"tip_deflection_ratio", l.tip_deflection / l.exact_tip_deflection},
+                    {"seconds", l.seconds}});
+  }
+  const double rate = reference_fem::convergence_rate(levels);
+  *md += fmt::format("\nLeast-squares L2 rate: **{:.2f}** (expected 3 for degree 2; asserted >= 2.5)\n\n", rate);
+  return {{"levels", rows}, {"l2_rate", rate}, {"expected_rate", 3.0}, {"pass", rate >= 2.5}};
+}
+
+/// One mesh level of one case.
+struct LungLevel {
+  double h_mm = 0.0;
+  reference_fem::FemRunResult run;
+  std::string error;  ///< non-empty when the solve failed (e.g. Newton did not converge)
+};
+
+/// Solve every case at every mesh size, one after the other: Gmsh is a process-wide singleton, and the FEM's
+/// Trilinos objects make MPI calls, which MPI (initialised for one thread at a time) does not allow from
+/// concurrent threads. Each solve assembles with all the cores.
+std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& opt, const std::vector<core::Case>& cases,
+                                                       Progress* progress) {
+  std::vector<std::vector<LungLevel>> levels(cases.size());
+  for (double h : opt.sizes_mm) {
+    std::vector<core::Geometry> geometries;
+    for (const auto& c : cases) {
+      progress->step(fmt::format("{}: mesh size {} mm", c.name, h));
+      core::GeometryOptions g_options;
+      g_options.fem_mesh_size = h * 1e-3;
+      g_options.build_node_cloud = false;
+      geometries.push_back(core::build_geometry(c, g_options));
+    }
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      try {
+        levels[i].push_back({h, reference_fem::run_case(cases[i], geometries[i])});
+      } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
+        levels[i].push_back({h, {}, e.what()});
+        std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, h, e.what());
+        continue;
+      }
+      const auto& r = levels[i].back().run;
+      std::cerr << fmt::format("  {} at {} mm: {} DOFs, max sample |u| {:.4f} mm, {:.1f} s\n", cases[i].name, h,
+                               r.n_dofs, r.sample_displacements.rowwise().norm().maxCoeff() * 1e3, r.total_seconds);
+    }
+  }
+  return levels;
+}
+
+nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& config, const core::Case& c,
+                              const std::vector<LungLevel>& levels, std::string* md) {
+  std::vector<Eigen::MatrixXd> u;
+  nlohmann::json rows = nlohmann::json::array();
+  *md += fmt::format("## Mesh convergence: {} (degree {})\n\n| mesh size [mm] | tets | DOFs | Newton its | crack faces | "
+                     "max sample |u| [mm] | change to previous level | probe strain mean / peak | support-edge strain mean / peak "
+                     "| time [s] |\n"
+                     "|---|---|---|---|---|---|---|---|---|---|\n",
+                     c.name, c.fem.degree);
+  for (const auto& level : levels) {
+    const double h = level.h_mm;
+    if (!level.error.empty()) {
+      *md += fmt::format("| {} | failed: {} | | | | | | | | |\n", h, level.error);
+      rows.push_back({{"mesh_size_mm", h}, {"error", level.error}});
+      continue;
+    }
+    const reference_fem::FemRunResult& r = level.run;
+    u.push_back(r.sample_displacements);
+    int its = 0;
+    for (const auto& s : r.steps) its += s.newton_iterations;
+    std::optional<double> change;
+    if (u.size() > 1) change = (u[u.size() - 1] - u[u.size() - 2]).norm() / u.back().norm();
+    *md += fmt::format("| {} | {} | {} | {} | {} | {:.4f} | {} | {:.1f} % / {:.1f} % | {:.2f} % / {:.2f} % | {:.1f} |\n",
+                       h, r.n_cells, r.n_dofs, its, r.crack_faces,
+                       r.sample_displacements.rowwise().norm().maxCoeff() * 1e3,
+                       change ? fmt::format("{:.2f} %", *change * 100) : "", r.probe_strain.mean * 100,
+                       r.probe_strain.peak * 100, r.support_edge_strain.mean * 100, r.support_edge_strain.peak * 100,
+                       r.total_seconds);
+    nlohmann::json samples = nlohmann::json::array();
+    for (Eigen::Index i = 0; i < r.sample_displacements.rows(); ++i)
+      samples.push_back({r.sample_displacements(i, 0) * 1e3, r.sample_displacements(i, 1) * 1e3,
+                         r.sample_displacements(i, 2) * 1e3});
+    rows.push_back({{"mesh_size_mm", h},
+                    {"n_cells", r.n_cells},
+                    {"n_dofs", r.n_dofs},
+                    {"newton_iterations", its},
+                    {"crack_faces", r.crack_faces},
+                    {"probe_strain_mean", r.probe_strain.mean},
+                    {"probe_strain_peak", r.probe_strain.peak},
+                    {"support_edge_strain_mean", r.support_edge_strain.mean},
+                    {"support_edge_strain_peak", r.support_edge_strain.peak},
+                    {"support_edge_band_mm", reference_fem::kSupportEdgeBand * 1e3},
+                    {"seconds", r.total_seconds},
+                    {"sample_displacements_mm", samples},
+                    {"relative_change_to_previous", change ? nlohmann::json(*change) : nlohmann::json()}});
+  }
+  // Converged: the first level whose samples change by less than the threshold at the next level.
+  nlohmann::json converged;
+  bool all_solved = true;
+  for (const auto& level : levels) all_solved = all_solved && level.error.empty();
+  for (std::size_t l = 0; all_solved && l + 1 < u.size(); ++l)
+    if ((u[l + 1] - u[l]).norm() / u[l + 1].norm() < opt.converged_change) {
+      converged = levels[l].h_mm;
+      break;
+    }
+  // Richardson on the last three levels (norms of the differences of all sample displacements).
+  nlohmann::json richardson;
+  if (all_solved && u.size() >= 3) {
+    std::vector<double> h_mm;
+    for (const auto& level : levels) h_mm.push_back(level.h_mm);
+    const MeshStudyEstimate estimate = estimate_remaining_error(u, h_mm, expected_sample_order(c));
+    richardson = estimate.json;
+    if (estimate.extrapolated.size() > 0) {  // the comparator's `--reference extrapolated`
+      nlohmann::json samples = nlohmann::json::array();
+      for (Eigen::Index i = 0; i < estimate.extrapolated.rows(); ++i)
+        samples.push_back({estimate.extrapolated(i, 0) * 1e3, estimate.extrapolated(i, 1) * 1e3,
+                           estimate.extrapolated(i, 2) * 1e3});
+      richardson["extrapolated_sample_displacements_mm"] = samples;
+    }
+    *md += "\n" + estimate.sentence + "\n";
+  }
+  *md += converged.is_null()
+             ? fmt::format("Not converged to {:.0f} % within these levels.\n\n", opt.converged_change * 100)
+             : fmt::format("Converged (< {:.0f} % change at the next level) at mesh size **{} mm**.\n\n",
+                           opt.converged_change * 100, converged.get<double>());
+  return {{"config", config},
+          {"case", c.name},
+          {"degree", c.fem.degree},
+          {"levels", rows},
+          {"richardson", richardson},
+          {"converged_mesh_size_mm", converged},
+          {"criterion", fmt::format("||u_next - u||/||u_next|| over all sample displacements < {}", opt.converged_change)}};
+}
+
+int run_verify_fem(const VerifyFemOptions& opt) {
+  const int lung_steps = opt.skip_lung ? 0 : static_cast<int>(opt.configs.size() * opt.sizes_mm.size());
+  Progress progress("verify fem", 1 + static_cast<int>(opt.cantilever_levels.size()) + lung_steps);
+  core::OutputDirectory out(opt.out);
+  std::string md = "# FEM reference verification (`tissue verify fem`)\n\n";
+  nlohmann::json j;
+  progress.step("uniaxial relaxation and creep");
+  j["uniaxial"] = verify_uniaxial(&md);
+  j["cantilever"] = verify_cantilever(opt, &progress, &md);
+  if (!opt.skip_lung) {
+    std::vector<core::Case> cases;
+    for (const auto& config : opt.configs) cases.push_back(core::load_case(config));
+    const auto levels = solve_lung_levels(opt, cases, &progress);
+    nlohmann::json lung = nlohmann::json::object();
+    for (std::size_t i = 0; i < cases.size(); ++i)
+      lung[cases[i].name] = summarize_lung(opt, opt.configs[i], cases[i], levels[i], &md);
+    j["mesh_convergence"] = lung;
+    // The comparator uses one FEM mesh size for all cases: the coarsest that converged everywhere.
+    nlohmann::json size;
+    for (const auto& [name, r] : lung.items()) {
+      if (r["converged_mesh_size_mm"].is_null()) {
+        size = nullptr;
+        break;
+      }
+      const double s = r["converged_mesh_size_mm"].get<double>();
+      size = size.is_null() ? s : std::min(size.get<double>(), s);
+    }
+    j["reference_mesh_size_mm"] = size;
+  }
+  write_text_file(out.file("fem.json").string(), j.dump(2) + "\n");
+  write_text_file(out.file("fem.md").string(), md);
+  out.commit();
+  progress.done();
+  std::cout << md;
+  return 0;
+}
+
+}  // namespace
+
+void add_verify_commands(CLI::App& app) {
+  auto* group = app.add_subcommand("verify", "Verify a model against closed forms and its own mesh convergence");
+  group->require_subcommand(1);
+  auto* fem = group->add_subcommand("fem", "The FEM reference: closed forms, cantilever rate, lung mesh convergence");
+  fem->footer("Uniaxial relaxation and creep against their closed forms, the Timoshenko cantilever's L2 rate and the lung\n"
+              "mesh convergence study (the reference's error bar for compare); writes fem.json and fem.md.");
+  static VerifyFemOptions opt;
+  fem->add_option("--out", opt.out, "Output folder (written atomically)")->capture_default_str();
+  fem->add_option("--config", opt.configs, "Load cases for the mesh-convergence study")->capture_default_str();
+  fem->add_option("--sizes", opt.sizes_mm, "FEM mesh sizes [mm], coarse to fine")->capture_default_str();
+  fem->add_option("--cantilever-levels", opt.cantilever_levels, "Elements through the cantilever depth")
+      ->capture_default_str();
+  fem->add_flag("--skip-lung", opt.skip_lung, "Only the closed-form checks (fast)");
+  fem->callback([] { throw CommandResult{run_verify_fem(opt)}; });
+
+  auto* efg = group->add_subcommand("meshless", "The EFG model: MLS invariants, patch test, cantilever rates, creep");
+  efg->footer("The MLS invariants, the patch test against the quadrature order, the Timoshenko cantilever's L2 and energy\n"
+              "rates and the creep bar; writes meshless.json and meshless.md.");
+  static std::string efg_out = "results/verify";
+  static bool efg_quick = false;
+  efg->add_option("--out", efg_out, "Output folder (written atomically)")->capture_default_str();
+  efg->add_flag("--quick", efg_quick, "Fewer quadrature orders and cantilever levels (seconds instead of a minute)");
+  efg->callback([] { throw CommandResult{run_verify_meshless(efg_out, efg_quick)}; });
+}
+
+}  // namespace experiments

@@ -1,0 +1,77 @@
+#include "experiments/comparator/mesh_study_estimate.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace experiments {
+namespace {
+
+/// The observed order of levels a, b, c (coarse to fine) from the norms of their differences; 0 when the
+/// differences do not decrease.
+double observed_order(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const Eigen::MatrixXd& c, double ratio) {
+  const double d1 = (b - a).norm(), d2 = (c - b).norm();
+  return d2 > 0 && d1 > d2 ? std::log(d1 / d2) / std::log(ratio) : 0.0;
+}
+
+}  // namespace
+
+double expected_sample_order(const core::Case& c) {
+  const bool clamp = c.fixed_region.support == core::FixedRegionSpec::Support::clamp;
+  return clamp || c.cut ? 1.0 : 2.0;  // header
+}
+
+MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                           double expected_order) {
+  if (u.size() != h_mm.size()) throw std::invalid_argument("estimate_remaining_error: one mesh size per level");
+  if (!(expected_order > 0.0)) throw std::invalid_argument("estimate_remaining_error: expected order must be > 0");
+  MeshStudyEstimate e;
+  if (u.size() < 3) return e;
+  const std::size_t n = u.size();
+  nlohmann::json orders = nlohmann::json::array();
+  for (std::size_t l = 2; l < n; ++l)
+    orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], 0.5 * (h_mm[l - 2] / h_mm[l - 1] + h_mm[l - 1] / h_mm[l])));
+  const double d2 = (u[n - 1] - u[n - 2]).norm(), finest = u[n - 1].norm();
+  const double ratio = 0.5 * (h_mm[n - 3] / h_mm[n - 2] + h_mm[n - 2] / h_mm[n - 1]);
+  const double p = orders.back().get<double>();
+  if (d2 == 0.0) {
+    e.json = {{"note", "the last two levels agree exactly"}};
+    e.sentence = "Richardson: the last two levels agree exactly.";
+    return e;
+  }
+  if (std::abs(p - expected_order) <= kOrderTolerance) {
+    const double error = d2 / (std::pow(ratio, p) - 1.0) / finest;
+    e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, p) - 1.0);
+    e.json = {{"kind", "richardson"}, {"observed_order", p}, {"expected_order", expected_order},
+              {"estimated_error_of_finest_relative", error}, {"observed_orders", orders}};
+    e.sentence = fmt::format("Richardson (last three levels): observed order {:.2f} (expected {:.0f}), estimated "
+                             "remaining error of the finest level {:.2f} % of the sample displacements.",
+                             p, expected_order, 100 * error);
+    return e;
+  }
+  // Outside the asymptotic range, never the order that would shrink the bar: below the expected order, the data's
+  // own (not below kLowestOrder); above it, the expected one.
+  const double assumed = p < expected_order ? std::max(p, kLowestOrder) : expected_order;
+  const double error = d2 / (std::pow(ratio, assumed) - 1.0) / finest;
+  e.extrapolated = u[n - 1] + (u[n - 1] - u[n - 2]) / (std::pow(ratio, assumed) - 1.0);
+  const std::string why = p > 0 ? fmt::format("observed order {:.2f} {} the expected {:.0f} ± {}", p,
+                                              p < expected_order ? "below" : "above", expected_order, kOrderTolerance)
+                                : std::string("differences not decreasing");
+  e.json = {{"kind", "assumed_order"},
+            {"note", why + ": not in the asymptotic range; the estimate assumes the smaller of the two orders (at least "
+                           "1) and is not a bound"},
+            {"assumed_order", assumed},
+            {"expected_order", expected_order},
+            {"estimated_error_of_finest_relative", error},
+            {"observed_orders", orders}};
+  if (p > 0) e.json["observed_order_not_used"] = p;
+  e.sentence = fmt::format("Richardson: {} (not in the asymptotic range). Assuming order {:.2f}, the remaining error "
+                           "of the finest level is about {:.2f} % of the sample displacements; this is an estimate, "
+                           "not a bound.",
+                           why, assumed, 100 * error);
+  return e;
+}
+
+}  // namespace experiments

@@ -1,0 +1,51 @@
+#pragma once
+// The FEM reference's remaining discretisation error at the samples, from a mesh study's last three levels
+// (tissue verify fem; the comparator's error bar, experiments/comparator/compare_metrics.hpp).
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "core/case.hpp"
+
+namespace experiments {
+
+/// How far an observed order may sit from the expected one and still count as asymptotic.
+constexpr double kOrderTolerance = 0.3;
+/// The lowest order the samples converge at here (a clamp's edge or a crack's front): an estimate outside the
+/// asymptotic range never assumes less, since order 0.2 would give 28 % from a 1 % change.
+constexpr double kLowestOrder = 1.0;
+
+/// The order at which a case's sample displacements converge under the study's refinement, set by the roughest
+/// line of the solution (docs/FEM_REFERENCE.md, "The order the samples converge at"): the samples lie away from
+/// it, so their error is the square of the energy error there, h^(2 lambda) for a singularity r^lambda.
+///  * a clamp's edge or a crack's front, r^(1/2): order 1;
+///  * otherwise (an elastic support, whose traction only jumps at the load patch's edge, u ~ r log r, and, untapered,
+///    at the support's edge): order 2.
+double expected_sample_order(const core::Case& c);
+
+struct MeshStudyEstimate {
+  /// Always (with three levels or more and the last two different): expected_order, estimated_error_of_finest_relative,
+  /// kind ("richardson" or "assumed_order"), observed_orders (one per consecutive three levels). Richardson
+  /// (observed order within kOrderTolerance of the expected one): observed_order. Otherwise: assumed_order (see
+  /// estimate_remaining_error), observed_order_not_used when one was found, and a note saying that the figure is an estimate
+  /// outside the asymptotic range, not a bound. {note} alone when the last two levels agree exactly; empty with
+  /// fewer than three levels.
+  nlohmann::json json;
+  std::string sentence;  ///< the same for fem.md
+  /// The samples extrapolated from the last two levels with the order the estimate used,
+  /// u_f + (u_f - u_{f-1}) / (r^p - 1), in the units and shape of `u`; empty when there is no estimate.
+  Eigen::MatrixXd extrapolated;
+};
+
+/// `u[l]`: every sample displacement of level l (any shape, same for all levels), `h_mm[l]` its mesh size,
+/// coarse to fine. The error is relative to the finest level's norm. An observed order within kOrderTolerance of
+/// `expected_order` is extrapolated with. Any other is not in the asymptotic range, and the estimate assumes the
+/// order that gives the larger bar: below the expected order the observed one (not less than kLowestOrder: a coarse
+/// level not yet asymptotic, or samples within an element of a singular line, which converge at about order 1
+/// before the mesh resolves them), above it the expected one (a larger order would shrink the bar on the strength
+/// of a coincidence). It says so, and that the figure is an estimate, not a bound.
+MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                           double expected_order);
+
+}  // namespace experiments

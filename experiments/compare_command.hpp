@@ -1,9 +1,0 @@
-#pragma once
-#include <CLI/CLI.hpp>
-
-namespace experiments {
-
-/// `tissue compare CONFIG --out DIR`: the FEM reference and both meshless variants on one case (compare.hpp).
-void add_compare_command(CLI::App& app);
-
-}  // namespace experiments

@@ -1,0 +1,28 @@
+#pragma once
+// The meshless (EFG) model behind `tissue solve meshless` (solve_commands.cpp) and `tissue verify meshless`
+// (verify_commands.cpp).
+#include <functional>
+#include <string>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "experiments/models/model_result.hpp"
+#include "meshless/efg/efg_problem.hpp"
+
+namespace experiments {
+
+/// Solve the case with the EFG model; VTU per output step goes to `vtu_prefix`_NNN.vtu (the node cloud's cells
+/// with the displacement at the nodes) and, for a cut body, `vtu_prefix`_lips_NNN.vtu (both lips of the cut, each
+/// with its own displacement: the opened cut) when the prefix is not empty. `on_step` gets a progress line per step.
+/// With `progressive_cut` the case's cut is not there at once: it advances along its polyline in /cut/steps equal
+/// increments, one at the start of each of the first /cut/steps time steps (a local update of the shape functions,
+/// meshless::EfgModel::advance_cut, then the step's solve, with the history carried over).
+ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
+                           const std::function<void(const std::string&)>& on_step = {},
+                           const meshless::EfgOptions& options = {}, bool progressive_cut = false);
+
+/// `tissue verify meshless`: invariants, patch test, cantilever convergence and creep curve into
+/// OUT/meshless.json and OUT/meshless.md.
+int run_verify_meshless(const std::string& out_dir, bool quick);
+
+}  // namespace experiments

@@ -1,9 +1,0 @@
-#pragma once
-// The `tissue reproduce` subcommand (experiments/reproduce.hpp).
-#include <CLI/CLI.hpp>
-
-namespace experiments {
-
-void add_reproduce_command(CLI::App& app);
-
-}  // namespace experiments

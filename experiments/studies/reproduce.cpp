@@ -1,0 +1,547 @@
+#include "experiments/studies/reproduce.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <memory>
+#include <fstream>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <stdexcept>
+
+#include "core/case.hpp"
+#include "core/geometry.hpp"
+#include "core/json_reader.hpp"
+#include "core/output_directory.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/io/child_process.hpp"
+#include "experiments/models/model_registry.hpp"
+#include "experiments/models/model_result.hpp"
+#include "experiments/io/progress.hpp"
+#include "meshless/efg/efg_problem.hpp"
+#include "meshless/surrogate/surrogate.hpp"
+#include "meshless/surrogate/surrogate_builder.hpp"
+
+namespace experiments {
+
+using json = nlohmann::json;
+
+namespace {
+
+json read_json_file(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw core::CaseError(file, "", "a readable JSON file (it could not be opened)");
+  try {
+    return json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw core::CaseError(file, "", std::string("valid JSON (") + e.what() + ")");
+  }
+}
+
+/// A case path of the plan, relative to the plan's folder; it must exist.
+std::string resolve_case(const core::JsonReader& r, const std::string& key, const std::string& plan_file) {
+  const std::filesystem::path p =
+      std::filesystem::path(plan_file).parent_path() / std::filesystem::path(r.string(key));
+  if (!std::filesystem::is_regular_file(p))
+    r.fail(key, fmt::format("a case file relative to the plan's folder ({} does not exist)", p.string()));
+  return p.lexically_normal().string();
+}
+
+/// The Table 1 RMSEs of one `tissue compare` summary.json, one entry per scored model of the case (its /compare
+/// list: a model that could not solve the case says why), with the paper's figures beside them.
+json table1_row(const ReproducePlan::Table1Case& t, const json& summary) {
+  json models = json::array();
+  for (const auto& [name, m] : summary.at("models").items())
+    models.push_back({{"name", name},
+                      {"role", m.value("role", std::string())},
+                      {"rmse_mm", m.at("rmse_mm")},
+                      {"relative", m.at("rmse_relative_to_peak")},
+                      {"unflagged_mm", m.at("rmse_unflagged_mm")},
+                      {"seconds", m.at("timings").is_object() ? m.at("timings").at("total_seconds") : json(nullptr)}});
+  for (const auto& [name, n] : summary.value("not_solved", json::object()).items())
+    models.push_back({{"name", name}, {"role", n.at("role")}, {"not_solved", n.at("why")}});
+  return {{"label", t.label},
+          {"config", t.config},
+          {"reference", summary.at("reference").at("model")},
+          {"peak_reference_mm", summary.at("reference").at("peak_sample_displacement_mm")},
+          {"models", models},
+          {"difference_mm", summary.value("difference_mm", json())},
+          {"difference_definition", summary.value("difference_definition", json())},
+          {"flagged_samples", summary.at("flagged_samples")},
+          {"reference_error_bar", summary.at("reference").at("error_bar")},
+          {"cut_effect", summary.value("cut_effect", json())},
+          {"paper_enrichment_mm", t.paper_enrichment_mm},
+          {"paper_visibility_mm", t.paper_visibility_mm},
+          {"paper_difference_mm", t.paper_enrichment_mm - t.paper_visibility_mm}};
+}
+
+std::string number_or_dash(const json& v, const char* format) {
+  return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : std::string("–");
+}
+
+/// The first model of a row whose role is of `kind` ("proposed", "baseline"), or null.
+const json* model_with_role(const json& row, const std::string& kind) {
+  for (const json& m : row.at("models"))
+    if (role_kind(m.at("role").get<std::string>()) == kind && !m.contains("not_solved")) return &m;
+  return nullptr;
+}
+
+/// Which of the proposed model and the baseline is closer to the reference, and whether the difference stands out of
+/// the reference's error bar. Only the reference's bar enters: the meshless model's own change between clouds is
+/// common to both variants on the same cloud, and is not measured by one run.
+std::string verdict(const json& r) {
+  const json* proposed = model_with_role(r, "proposed");
+  const json* baseline = model_with_role(r, "baseline");
+  if (!proposed || !baseline || !r.at("difference_mm").is_number()) return "no proposed model and baseline to compare";
+  const double difference = r.at("difference_mm").get<double>();
+  if (difference == 0.0) return "no cut: the two variants are one model";
+  const std::string p = proposed->at("name"), b = baseline->at("name");
+  const std::string closer = difference < 0 ? p : b;
+  std::string effect;
+  if (!r.at("cut_effect").is_null()) {
+    const json& m = r.at("cut_effect").at("models");
+    if (m.contains(p) && m.contains(b))
+      effect = fmt::format("; on the cut's own effect {} is closer",
+                           m.at(p).at("rmse_mm").get<double>() < m.at(b).at("rmse_mm").get<double>() ? p : b);
+  }
+  const json& bar = r.at("reference_error_bar");
+  if (!bar.value("known", false)) return closer + " closer" + effect + "; significance unknown (no error bar)";
+  const double ratio = std::abs(difference) / bar.at("rms_mm").get<double>();
+  return fmt::format("{} closer{}; the difference is {:.1f}× the reference's bar: {}", closer, effect, ratio,
+                     ratio > 2.0 ? "significant" : ratio > 1.0 ? "marginal" : "not significant");
+}
+
+/// The models of every row, in first-seen order: one column each.
+std::vector<std::pair<std::string, std::string>> table1_columns(const json& rows) {
+  std::vector<std::pair<std::string, std::string>> columns;  // name, role kind
+  for (const json& r : rows)
+    for (const json& m : r.at("models")) {
+      const std::string name = m.at("name");
+      if (std::none_of(columns.begin(), columns.end(), [&](const auto& c) { return c.first == name; }))
+        columns.emplace_back(name, role_kind(m.at("role").get<std::string>()));
+    }
+  return columns;
+}
+
+std::string table1_md(const json& rows) {
+  const auto columns = table1_columns(rows);
+  std::string md = "# Table 1: RMSE of the sample displacements against the FEM reference (eq. 34)\n\n| case |";
+  std::string rule = "|---|";
+  for (const auto& [name, kind] : columns) {
+    md += fmt::format(" {} ({}) [mm] |", name, kind);
+    rule += "---|";
+  }
+  md += " difference [mm] | without flagged samples [mm] | cut effect RMSE [mm] | reference error bar | verdict | "
+        "paper: proposed / baseline / difference [mm] |\n" + rule + "---|---|---|---|---|---|\n";
+  for (const json& r : rows) {
+    const auto find = [&](const std::string& name) -> const json* {
+      for (const json& m : r.at("models"))
+        if (m.at("name") == name) return &m;
+      return nullptr;
+    };
+    md += "| " + r.at("label").get<std::string>() + " |";
+    std::string unflagged, effect;
+    for (const auto& [name, kind] : columns) {
+      const json* m = find(name);
+      if (!m) {
+        md += " – |";
+        continue;
+      }
+      if (m->contains("not_solved")) {
+        md += " not solved |";
+        continue;
+      }
+      md += fmt::format(" {:.4f} ({:.1f} %) |", m->at("rmse_mm").get<double>(), 100 * m->at("relative").get<double>());
+      unflagged += fmt::format("{}{} {}", unflagged.empty() ? "" : ", ", name,
+                               number_or_dash(m->at("unflagged_mm"), "{:.4f}"));
+      const json& e = r.at("cut_effect");
+      if (!e.is_null() && e.at("models").contains(name)) {
+        const json& em = e.at("models").at(name);
+        effect += fmt::format("{}{} {:.4f} ({:.1f} %)", effect.empty() ? "" : ", ", name, em.at("rmse_mm").get<double>(),
+                              100 * em.value("rmse_relative_to_fem_peak", 0.0));
+      }
+    }
+    const json& bar = r.at("reference_error_bar");
+    const std::string error_bar = bar.value("known", false)
+                                      ? fmt::format("{:.3f} mm ({})", bar.at("rms_mm").get<double>(),
+                                                    bar.value("method", std::string()))
+                                      : "unknown: " + bar.value("why_unknown", std::string());
+    md += fmt::format(" {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
+                      number_or_dash(r.at("difference_mm"), "{:+.4f}"), unflagged.empty() ? "–" : unflagged,
+                      effect.empty() ? "–" : effect, error_bar, verdict(r), r.at("paper_enrichment_mm").get<double>(),
+                      r.at("paper_visibility_mm").get<double>(), r.at("paper_difference_mm").get<double>());
+  }
+  for (const json& r : rows)
+    for (const json& m : r.at("models"))
+      if (m.contains("not_solved"))
+        md += fmt::format("\n{}, {}: not solved: {}.\n", r.at("label").get<std::string>(), m.at("name").get<std::string>(),
+                          m.at("not_solved").get<std::string>());
+  md += "\nThe paper's Table 1 is for its own lung models (§5.4); ours are the lung cases named in the plan, on another "
+        "lung, support and load, so compare the ranking and the relative size of the models, not the millimetres. "
+        "One column per model of each case's /compare list, with its role: proposed (the paper's model), baseline "
+        "(the paper's interactive meshless cutting model), other meshless models, and the floor (the undeformed body: "
+        "its RMSE is the reference's own RMS displacement, which any model must beat). The difference is the "
+        "proposed model's RMSE minus the baseline's. The cut effect is each model's cut solve minus its own uncut "
+        "solve, compared with the FEM's, so that the meshless model's common discretisation error does not decide "
+        "which cut treatment wins. The verdict's significance sets the difference of the RMSEs against the "
+        "reference's error bar (RMS): above 2× significant, 1–2× marginal. Each case's full comparison (per-sample "
+        "errors, flags, timings, radar diagram) is in its sub-folder.\n";
+  return md;
+}
+
+/// The timing case at force magnitude `magnitude` along the case's force direction, with `steps` time steps.
+core::Case case_at_force(const core::Case& base, double magnitude, int steps) {
+  json doc = base.document;
+  const Eigen::Vector3d direction = base.load.force.normalized();
+  doc["load"]["force"] = {magnitude * direction(0), magnitude * direction(1), magnitude * direction(2)};
+  doc["time"]["steps"] = steps;
+  if (doc.contains("cut") && doc["cut"].contains("steps")) doc["cut"]["steps"] = 1;
+  doc["output"]["vtu"] = false;
+  return core::parse_case(doc, base.source_file);
+}
+
+double peak_sample_mm(const Eigen::MatrixXd& u) { return u.rowwise().norm().maxCoeff() * 1e3; }
+
+int newton_iterations(const ModelResult& r) {
+  int n = 0;
+  for (const StepTiming& s : r.steps) n += s.iterations;
+  return n;
+}
+
+/// Queries timed per force (their median is reported): enough to smooth out the scheduler's interruptions.
+constexpr int kQueriesPerForce = 2001;
+
+/// The models of the Fig. 9 analogue: the timing case's reference and scored models that solve it, without the
+/// floor (it takes no time) and without a model that is another's on this case (Model::same_as).
+std::vector<std::unique_ptr<Model>> timed_models(const core::Case& c) {
+  std::vector<std::unique_ptr<Model>> timed;
+  for (auto& m : models_of_case(c)) {
+    if (role_kind(m->role()) == "floor" || !m->cannot_solve(c).empty()) continue;
+    const std::string same = m->same_as(c);
+    if (!same.empty() && std::any_of(timed.begin(), timed.end(), [&](const auto& t) { return t->name() == same; }))
+      continue;
+    timed.push_back(std::move(m));
+  }
+  return timed;
+}
+
+/// One force: every timed model's whole run (set-up, assembly and solves; the geometry is shared), or its error.
+json time_one_force(const core::Case& c, const core::Geometry& g, double force,
+                    const std::vector<std::unique_ptr<Model>>& models, Progress* progress) {
+  json row = {{"force_N", force}, {"models", json::object()}};
+  for (const auto& m : models) {
+    try {
+      progress->step(fmt::format("{:.2f} N: {}, full solve", force, m->name()));
+      const ModelResult r = m->solve(c, g, SolveRequest{});
+      row["models"][m->name()] = {{"seconds", r.total_seconds},
+                                  {"setup_seconds", r.setup_seconds},
+                                  {"newton_iterations", newton_iterations(r)},
+                                  {"peak_sample_mm", peak_sample_mm(r.sample_displacements)}};
+    } catch (const std::exception& e) {
+      row["models"][m->name()] = {{"error", e.what()}};
+    }
+  }
+  return row;
+}
+
+/// Train the surrogate of `config` (as `tissue fit` does) and query it at `stressed`'s load point for each force
+/// along its force direction: the median wall time of a query over many repetitions, and the answer.
+json time_surrogate(const std::string& config, const core::Case& stressed, const std::vector<double>& forces,
+                    Progress* progress) {
+  const core::Case c = core::load_case(config);
+  progress->step(fmt::format("timing: training the surrogate of {} ({} full solves, as tissue fit)", config,
+                             6 * c.surrogate.contact_points.size() * c.surrogate.force_levels));
+  const auto t0 = std::chrono::steady_clock::now();
+  core::GeometryOptions geometry;
+  geometry.build_fem_mesh = false;
+  const core::Geometry g = core::build_geometry(c, geometry);
+  meshless::SurrogateBuildReport report;
+  const meshless::Surrogate surrogate(
+      meshless::build_surrogate(meshless::problem_from_case(c, g), c.surrogate, {}, {}, &report));
+  const double training_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  progress->step(fmt::format("timing: {} surrogate queries per force", kQueriesPerForce));
+  const json rows = surrogate_query_timing(surrogate, stressed.load.point, stressed.load.force.normalized(), forces,
+                                           kQueriesPerForce);
+  return {{"status", "measured"},
+          {"config", config},
+          {"node_spacing_mm", 1e3 * c.meshless.node_spacing},
+          {"surface_nodes", surrogate.num_surface_nodes()},
+          {"training_solves", report.training_solves},
+          {"training_seconds", training_seconds},
+          {"queries_per_force", kQueriesPerForce},
+          {"rows", rows}};
+}
+
+std::string surrogate_cell(const json& surrogate, std::size_t row) {
+  if (surrogate.at("status") != "measured") return surrogate.at("status").get<std::string>();
+  const json& r = surrogate.at("rows").at(row);
+  std::string flags;
+  if (!r.at("force_in_range").get<bool>()) flags += ", force clamped to the trained range";
+  if (!r.at("on_trained_contact").get<bool>()) flags += ", off the trained contact";
+  return fmt::format("{:.1f} µs (|u| = {:.3f} mm{})", 1e6 * r.at("seconds").get<double>(),
+                     r.at("contact_displacement_mm").get<double>(), flags);
+}
+
+std::string timing_cell(const json& model) {
+  if (model.contains("error")) return "failed: " + model.at("error").get<std::string>();
+  return fmt::format("{:.2f} s ({} Newton, peak {:.3f} mm)", model.at("seconds").get<double>(),
+                     model.at("newton_iterations").get<int>(), model.at("peak_sample_mm").get<double>());
+}
+
+/// "a / b" of two models' seconds in one row, or a dash when either failed.
+std::string seconds_ratio(const json& a, const json& b) {
+  return a.contains("seconds") && b.contains("seconds")
+             ? fmt::format("{:.2f}", a.at("seconds").get<double>() / b.at("seconds").get<double>())
+             : std::string("–");
+}
+
+std::string timing_md(const json& timing) {
+  const json& models = timing.at("models");
+  std::string proposed, reference;  // the ratio columns' models: the first of each role
+  for (const json& m : models) {
+    const std::string kind = role_kind(m.at("role").get<std::string>());
+    if (kind == "proposed" && proposed.empty()) proposed = m.at("name");
+    if (kind == "reference" && reference.empty()) reference = m.at("name");
+  }
+  std::string md = fmt::format(
+      "# Fig. 9 analogue: the time to compute one deformation result\n\n"
+      "Case `{}`, {} time step(s) per result, forces along the case's force direction at its load point. Each "
+      "time is the model's whole run for that force (set-up, assembly and solves), geometry excluded (built once: "
+      "{:.1f} s).\n\n| force [N] |",
+      timing.at("config").get<std::string>(), timing.at("steps").get<int>(),
+      timing.at("geometry_seconds").get<double>());
+  std::string rule = "|---|";
+  for (const json& m : models) {
+    md += fmt::format(" {} ({}), full solve |", m.at("name").get<std::string>(),
+                      role_kind(m.at("role").get<std::string>()));
+    rule += "---|";
+  }
+  const bool ratio = !proposed.empty() && !reference.empty();
+  if (ratio) md += fmt::format(" {} / {} |", proposed, reference);
+  for (const json& m : models)
+    if (m.at("name") != proposed && m.at("name") != reference && !proposed.empty())
+      md += fmt::format(" {} / {} |", m.at("name").get<std::string>(), proposed);
+  md += " surrogate query |";
+  if (!proposed.empty()) md += fmt::format(" {} / surrogate |", proposed);
+  const int extra = (ratio ? 1 : 0) + 1 + (proposed.empty() ? 0 : 1) +
+                    (proposed.empty() ? 0
+                                      : static_cast<int>(std::count_if(models.begin(), models.end(), [&](const json& m) {
+                                          return m.at("name") != proposed && m.at("name") != reference;
+                                        })));
+  for (int i = 0; i < extra; ++i) rule += "---|";
+  md += "\n" + rule + "\n";
+  const json& surrogate = timing.at("surrogate");
+  const bool measured = surrogate.at("status") == "measured";
+  const json& rows = timing.at("rows");
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const json& row = rows[i].at("models");
+    md += fmt::format("| {:.2f} |", rows[i].at("force_N").get<double>());
+    for (const json& m : models) md += " " + timing_cell(row.at(m.at("name").get<std::string>())) + " |";
+    if (ratio) md += " " + seconds_ratio(row.at(proposed), row.at(reference)) + " |";
+    for (const json& m : models)
+      if (m.at("name") != proposed && m.at("name") != reference && !proposed.empty())
+        md += " " + seconds_ratio(row.at(m.at("name").get<std::string>()), row.at(proposed)) + " |";
+    md += " " + surrogate_cell(surrogate, i) + " |";
+    if (!proposed.empty()) {
+      const json& p = row.at(proposed);
+      md += " " + (measured && p.contains("seconds")
+                       ? fmt::format("{:.3g}", p.at("seconds").get<double>() /
+                                                   surrogate.at("rows").at(i).at("seconds").get<double>())
+                       : std::string("–")) + " |";
+    }
+    md += "\n";
+  }
+  md += "\nThe ratios are measured in this run, on this machine: compare them, not the absolute seconds. The models "
+        "are the timing case's /compare list (docs/CONFIG.md), without the floor.\n";
+  if (measured)
+    md += fmt::format(
+        "\nThe surrogate (paper §3, docs/SURROGATE.md) is trained on `{}` ({:.0f} mm node spacing, {} surface "
+        "nodes), once, in {} full solves and {:.1f} s; a query is the median of {} calls, answering the contact "
+        "displacement and every surface node's. |u| is its contact node's displacement at the end of its "
+        "training ramp.\n",
+        surrogate.at("config").get<std::string>(), surrogate.at("node_spacing_mm").get<double>(),
+        surrogate.at("surface_nodes").get<int>(), surrogate.at("training_solves").get<int>(),
+        surrogate.at("training_seconds").get<double>(), surrogate.at("queries_per_force").get<int>());
+  return md;
+}
+
+void plot_timing(const core::OutputDirectory& out, json* timing) {
+  const std::string log = out.file("plot_timing.log").string();
+  const ProcessOutcome p = run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_timing.py",
+                                        out.file("timing.json").string(), out.file("timing.png").string()},
+                                       log);
+  if (p.ok()) {
+    std::filesystem::remove(log);
+    (*timing)["timing_png"] = "timing.png";
+    return;
+  }
+  std::filesystem::remove(out.file("timing.png"));
+  std::cerr << "warning: timing.png not written (" << p.error << "); see plot_timing.log\n";
+  (*timing)["timing_png"] = nullptr;
+  (*timing)["plot_error"] = p.error;
+}
+
+}  // namespace
+
+json surrogate_query_timing(const meshless::Surrogate& surrogate, const Eigen::Vector3d& point,
+                            const Eigen::Vector3d& direction, const std::vector<double>& forces, int queries) {
+  if (queries < 1) throw std::invalid_argument("surrogate_query_timing: at least one query per force");
+  core::PointMatrix u(surrogate.num_surface_nodes(), 3);  // the query's buffer, allocated once
+  json rows = json::array();
+  std::vector<double> seconds(queries);
+  for (double f : forces) {
+    meshless::SurrogateResponse r;
+    for (int k = 0; k < queries; ++k) {
+      const auto q0 = std::chrono::steady_clock::now();
+      r = surrogate.query(point, f * direction, &u);
+      seconds[k] = std::chrono::duration<double>(std::chrono::steady_clock::now() - q0).count();
+    }
+    std::nth_element(seconds.begin(), seconds.begin() + queries / 2, seconds.end());
+    rows.push_back({{"force_N", f},
+                    {"seconds", seconds[queries / 2]},
+                    {"contact_displacement_mm", 1e3 * r.contact_displacement.norm()},
+                    {"force_in_range", r.force_in_range},
+                    {"on_trained_contact", r.on_trained_contact}});
+  }
+  return rows;
+}
+
+ReproducePlan load_reproduce_plan(const std::string& file) {
+  const json doc = read_json_file(file);
+  core::JsonReader root(file, doc, "");
+  ReproducePlan plan;
+  plan.file = file;
+  root.string("description", std::string());
+  const json& table1 =
+      root.array("table1", 1, "a non-empty array of {label, config, paper: {enrichment_mm, visibility_mm}}");
+  for (std::size_t i = 0; i < table1.size(); ++i) {
+    core::JsonReader t(file, table1[i], fmt::format("/table1/{}", i));
+    ReproducePlan::Table1Case row;
+    row.label = t.string("label");
+    if (row.label.empty() || row.label.find_first_of("/\\") != std::string::npos)
+      t.fail("label", "a non-empty name without slashes (it names the case's sub-folder)");
+    row.config = resolve_case(t, "config", file);
+    const core::JsonReader paper = t.object("paper");
+    row.paper_enrichment_mm = paper.in_range("enrichment_mm", 0.0, 1e3, true, true);
+    row.paper_visibility_mm = paper.in_range("visibility_mm", 0.0, 1e3, true, true);
+    paper.finish();
+    t.finish();
+    for (const auto& other : plan.table1)
+      if (other.label == row.label) t.fail("label", "a label no other Table 1 case has");
+    plan.table1.push_back(row);
+  }
+  const core::JsonReader timing = root.object("timing");
+  plan.timing.config = resolve_case(timing, "config", file);
+  plan.timing.steps = timing.integer("steps", 1, 100, 1);
+  if (timing.has("surrogate")) {
+    plan.timing.surrogate_config = resolve_case(timing, "surrogate", file);
+    const core::Case trained = core::load_case(plan.timing.surrogate_config);
+    const core::Case stressed = core::load_case(plan.timing.config);
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Eigen::Vector3d& p : trained.surrogate.contact_points)
+      nearest = std::min(nearest, (p - stressed.load.point).norm());
+    if (!(nearest <= trained.surrogate.patch_radius))
+      timing.fail("surrogate", fmt::format("a case whose /surrogate/contact_points include the timing case's load "
+                                           "point (the nearest is {:.3g} mm away; the patch radius is {:.3g} mm)",
+                                           1e3 * nearest, 1e3 * trained.surrogate.patch_radius));
+  }
+  const json& forces = timing.array("forces_N", 1, "a non-empty array of force magnitudes in (0, 100] N");
+  for (std::size_t i = 0; i < forces.size(); ++i) {
+    if (!forces[i].is_number() || !(forces[i].get<double>() > 0.0) || forces[i].get<double>() > 100.0)
+      throw core::CaseError(file, fmt::format("/timing/forces_N/{}", i), "a force magnitude in (0, 100] N");
+    plan.timing.forces.push_back(forces[i].get<double>());
+  }
+  timing.finish();
+  root.finish();
+  return plan;
+}
+
+bool ReproduceOptions::IsValid(std::string* why) const {
+  if (out_dir.empty()) return *why = "--out must not be empty", false;
+  if (!table1 && !timing) return *why = "--table1-only and --timing-only exclude each other", false;
+  return true;
+}
+
+int run_reproduce(const ReproduceOptions& options) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("reproduce: " + why);
+  const ReproducePlan plan = load_reproduce_plan(options.plan);
+  // Every case is read (and rejected) before anything runs.
+  std::vector<core::Case> cases;
+  for (const auto& t : plan.table1) cases.push_back(core::load_case(t.config));
+  const core::Case timing_case = core::load_case(plan.timing.config);
+  if (timing_case.load.force.norm() == 0.0)
+    throw core::CaseError(plan.timing.config, "/load/force", "a non-zero force (its direction is the timing's)");
+  for (double f : plan.timing.forces) case_at_force(timing_case, f, plan.timing.steps);
+
+  for (const auto& c : cases) models_of_case(c);  // an unknown model name is refused before anything runs
+  const std::vector<std::unique_ptr<Model>> timed = timed_models(timing_case);
+  const int n_forces = static_cast<int>(plan.timing.forces.size());
+  const int n_timed = static_cast<int>(timed.size());
+  const bool with_surrogate = !plan.timing.surrogate_config.empty();
+  Progress progress("reproduce", (options.table1 ? static_cast<int>(plan.table1.size()) : 0) +
+                                     (options.timing ? 2 + n_timed * n_forces + 2 * with_surrogate : 0) + 1);
+  core::OutputDirectory out(options.out_dir);
+  write_text_file(out.file("plan.json").string(), read_json_file(options.plan).dump(2) + "\n");
+
+  if (options.table1) {
+    json rows = json::array();
+    for (const auto& t : plan.table1) {
+      progress.step(fmt::format("Table 1, {}: tissue compare {}", t.label, t.config));
+      CompareOptions compare;
+      compare.out_dir = out.file(t.label).string();
+      compare.plot = options.plot;
+      if (const int code = run_compare(t.config, compare); code != 0)
+        throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
+      rows.push_back(table1_row(t, read_json_file(out.file(t.label + "/summary.json").string())));
+    }
+    write_text_file(out.file("table1.json").string(), json{{"rows", rows}}.dump(2) + "\n");
+    const std::string md = table1_md(rows);
+    write_text_file(out.file("table1.md").string(), md);
+    std::cout << md << "\n";
+  }
+
+  if (options.timing) {
+    progress.step(fmt::format("timing: geometry of {} (built once for every force)", plan.timing.config));
+    const double t0 = progress.elapsed_seconds();
+    const core::Geometry g = core::build_geometry(timing_case);
+    json timing = {{"config", plan.timing.config},
+                   {"steps", plan.timing.steps},
+                   {"geometry_seconds", progress.elapsed_seconds() - t0},
+                   {"models", json::array()},
+                   {"surrogate", {{"status", "not measured: the plan's /timing has no surrogate case"}}},
+                   {"rows", json::array()}};
+    for (const auto& m : timed) timing["models"].push_back({{"name", m->name()}, {"role", m->role()}});
+    for (double f : plan.timing.forces)
+      timing["rows"].push_back(
+          time_one_force(case_at_force(timing_case, f, plan.timing.steps), g, f, timed, &progress));
+    if (with_surrogate) {
+      try {
+        timing["surrogate"] = time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces, &progress);
+      } catch (const std::exception& e) {  // recorded like a failed model run; the rest of the timing stands
+        timing["surrogate"] = {{"status", std::string("failed: ") + e.what()}};
+      }
+    }
+    progress.step("timing: tables and timing.png (scripts/plot_timing.py)");
+    // The plot script reads timing.json; it is written again with the plot's outcome.
+    write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    if (options.plot) {
+      plot_timing(out, &timing);
+      write_text_file(out.file("timing.json").string(), timing.dump(2) + "\n");
+    }
+    const std::string md = timing_md(timing);
+    write_text_file(out.file("timing.md").string(), md);
+    std::cout << md << "\n";
+  }
+  out.commit();
+  progress.done();
+  std::cout << fmt::format("wrote {} in {:.0f} s\n", out.destination().string(), progress.elapsed_seconds());
+  return 0;
+}
+
+}  // namespace experiments

@@ -1,0 +1,588 @@
+#include "experiments/studies/sweep.hpp"
+
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "core/case.hpp"
+#include "core/case_error.hpp"
+#include "core/json_reader.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/io/child_process.hpp"
+#include "experiments/models/model_result.hpp"
+#include "experiments/io/progress.hpp"
+
+namespace experiments {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+/// FNV-1a, 64 bits: a stable name for a case document (std::hash is not stable across builds).
+std::string fnv1a_hex(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char ch : text) {
+    h ^= ch;
+    h *= 1099511628211ull;
+  }
+  return fmt::format("{:016x}", h);
+}
+
+/// RFC 6901 escaping of one reference token, for JSON paths in messages.
+std::string escape_token(const std::string& token) {
+  std::string out;
+  for (char ch : token) out += ch == '~' ? "~0" : ch == '/' ? "~1" : std::string(1, ch);
+  return out;
+}
+
+std::string value_text(const json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
+
+/// Checks that `pointer` is a valid RFC 6901 pointer whose parent exists in `document` (the target itself may
+/// be an optional key that the base case leaves out); returns why not, or "".
+std::string pointer_problem(const std::string& pointer, const json& document) {
+  json::json_pointer p;
+  try {
+    p = json::json_pointer(pointer);
+  } catch (const json::exception& e) {
+    return fmt::format("expected an RFC 6901 JSON pointer such as \"/meshless/node_spacing\", got \"{}\"", pointer);
+  }
+  if (p.empty()) return "expected a pointer to a value inside the case, not the whole case (\"\")";
+  const json::json_pointer parent = p.parent_pointer();
+  if (!document.contains(parent))
+    return fmt::format("{} does not exist in the base case (its parent {} is missing)", pointer,
+                       parent.to_string().empty() ? "/" : parent.to_string());
+  const json& container = document.at(parent);
+  if (container.is_array() && !document.contains(p))
+    return fmt::format("{} is past the end of the array {} ({} elements)", pointer, parent.to_string(),
+                       container.size());
+  if (!container.is_object() && !container.is_array())
+    return fmt::format("{} is inside {}, which is a {}, not an object or array", pointer, parent.to_string(),
+                       container.type_name());
+  return "";
+}
+
+/// The case for one combination of values, validated; throws core::CaseError from core::parse_case.
+json generate_case(const SweepSpec& spec, const std::vector<std::pair<std::string, json>>& assignments) {
+  json doc = spec.base_document;
+  for (const auto& [pointer, value] : spec.set) doc[json::json_pointer(pointer)] = value;
+  for (const auto& [pointer, value] : assignments) doc[json::json_pointer(pointer)] = value;
+  const core::Case c = core::parse_case(doc, spec.base_case_file);
+  // The generated case is written elsewhere: an STL path relative to the base case must stay valid.
+  if (c.geometry.source == core::GeometrySpec::Source::stl) doc["geometry"]["stl_file"] = c.geometry.stl_file;
+  return doc;
+}
+
+/// Write next to `path`, then rename over it: a reader or a crash never sees half a file.
+void write_replacing(const std::string& path, const std::string& text) {
+  const std::string partial = path + ".partial";
+  write_text_file(partial, text);
+  fs::rename(partial, path);
+}
+
+void write_json_file(const std::string& path, const json& j) { write_replacing(path, j.dump(2) + "\n"); }
+
+}  // namespace
+
+SweepSpec load_sweep(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw core::CaseError(path, "", "cannot open the sweep file (does it exist and is it readable?)");
+  json doc;
+  try {
+    doc = json::parse(in);
+  } catch (const json::parse_error& e) {
+    throw core::CaseError(path, "", fmt::format("expected valid JSON: {}", e.what()));
+  }
+  if (!doc.is_object()) throw core::CaseError(path, "", "expected a JSON object, got " + core::describe_json(doc));
+  const std::set<std::string> allowed{"name", "description", "base_case", "set", "parameters", "workers"};
+  for (const auto& [key, value] : doc.items())
+    if (!allowed.count(key))
+      throw core::CaseError(path, "/" + escape_token(key),
+                            "unknown key; allowed keys here are: base_case, description, name, parameters, set, "
+                            "workers");
+  SweepSpec s;
+  s.file = path;
+  const core::JsonReader r(path, doc, "");
+  s.name = r.string("name");
+  if (s.name.empty() || s.name.find_first_not_of("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789_-.") !=
+                            std::string::npos || s.name[0] == '.')
+    r.fail("name", fmt::format("expected a folder name of letters, digits, '_', '-' or '.', got \"{}\"", s.name));
+  s.description = r.string("description", std::string());
+  s.workers = r.integer("workers", 1, 64, 1);
+  fs::path base = r.string("base_case");
+  if (base.is_relative()) base = fs::path(path).parent_path() / base;
+  s.base_case_file = base.lexically_normal().string();
+  std::ifstream base_in(s.base_case_file);
+  if (!base_in) r.fail("base_case", fmt::format("expected an existing case file, but \"{}\" cannot be opened",
+                                                s.base_case_file));
+  try {
+    s.base_document = json::parse(base_in);
+  } catch (const json::parse_error& e) {
+    r.fail("base_case", fmt::format("{} is not valid JSON: {}", s.base_case_file, e.what()));
+  }
+
+  if (doc.contains("set")) {
+    if (!doc["set"].is_object())
+      throw core::CaseError(path, "/set", "expected an object of JSON pointer -> value, got " +
+                                              core::describe_json(doc["set"]));
+    for (const auto& [pointer, value] : doc["set"].items()) {
+      const std::string where = "/set/" + escape_token(pointer);
+      if (const std::string problem = pointer_problem(pointer, s.base_document); !problem.empty())
+        throw core::CaseError(path, where, problem);
+      s.set.emplace_back(pointer, value);
+    }
+  }
+  if (!doc.contains("parameters") || !doc["parameters"].is_array() || doc["parameters"].empty())
+    throw core::CaseError(path, "/parameters",
+                          "expected a non-empty array of {\"pointer\": \"/json/pointer\", \"values\": [...]}");
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < doc["parameters"].size(); ++i) {
+    const json& p = doc["parameters"][i];
+    const std::string where = fmt::format("/parameters/{}", i);
+    const core::JsonReader pr(path, p, where);
+    SweepParameter param;
+    param.pointer = pr.string("pointer");
+    if (!p.contains("values") || !p["values"].is_array() || p["values"].empty())
+      pr.fail("values", "expected a non-empty array of values for " + param.pointer);
+    param.values = p["values"].get<std::vector<json>>();
+    (void)pr.has("values");
+    for (const auto& [key, value] : p.items())
+      if (key != "pointer" && key != "values")
+        throw core::CaseError(path, where + "/" + escape_token(key), "unknown key; allowed keys here are: pointer, values");
+    // the base document as the runs see it: `set` applied
+    json with_set = s.base_document;
+    for (const auto& [ptr, value] : s.set) with_set[json::json_pointer(ptr)] = value;
+    if (const std::string problem = pointer_problem(param.pointer, with_set); !problem.empty())
+      throw core::CaseError(path, where + "/pointer", problem);
+    if (!seen.insert(param.pointer).second)
+      throw core::CaseError(path, where + "/pointer", param.pointer + " is swept twice; list its values once");
+    for (const auto& [ptr, value] : s.set)
+      if (ptr == param.pointer)
+        throw core::CaseError(path, where + "/pointer", param.pointer + " is also in /set; keep it in one place");
+    s.parameters.push_back(param);
+  }
+  return s;
+}
+
+std::vector<SweepRun> expand_sweep(const SweepSpec& spec) {
+  // The base case with `set` applied must itself be valid.
+  try {
+    generate_case(spec, {});
+  } catch (const core::CaseError& e) {
+    throw core::CaseError(spec.file, spec.set.empty() ? "/base_case" : "/set",
+                          fmt::format("the base case {} {}is invalid: {}", spec.base_case_file,
+                                      spec.set.empty() ? "" : "with /set applied ", e.what()));
+  }
+  // Each value alone, so that a bad value is named precisely.
+  for (std::size_t i = 0; i < spec.parameters.size(); ++i)
+    for (std::size_t k = 0; k < spec.parameters[i].values.size(); ++k) {
+      const auto& param = spec.parameters[i];
+      try {
+        generate_case(spec, {{param.pointer, param.values[k]}});
+      } catch (const core::CaseError& e) {
+        throw core::CaseError(spec.file, fmt::format("/parameters/{}/values/{}", i, k),
+                              fmt::format("{} = {} makes an invalid case: {}", param.pointer,
+                                          value_text(param.values[k]), e.what()));
+      }
+    }
+  // The Cartesian product, last parameter fastest.
+  std::vector<SweepRun> runs;
+  std::vector<std::size_t> index(spec.parameters.size(), 0);
+  std::set<std::string> ids;
+  while (true) {
+    std::vector<std::pair<std::string, json>> assignments;
+    SweepRun run;
+    std::string combination;
+    for (std::size_t i = 0; i < spec.parameters.size(); ++i) {
+      const json& v = spec.parameters[i].values[index[i]];
+      assignments.emplace_back(spec.parameters[i].pointer, v);
+      run.values.push_back(v);
+      combination += fmt::format("{}{} = {}", i ? ", " : "", spec.parameters[i].pointer, value_text(v));
+    }
+    try {
+      run.document = generate_case(spec, assignments);
+    } catch (const core::CaseError& e) {
+      throw core::CaseError(spec.file, "/parameters",
+                            fmt::format("the combination {} makes an invalid case: {}", combination, e.what()));
+    }
+    run.id = fnv1a_hex(run.document.dump());
+    if (ids.insert(run.id).second) runs.push_back(std::move(run));  // equal values twice: one run
+    std::size_t i = spec.parameters.size();
+    while (i > 0 && ++index[i - 1] == spec.parameters[i - 1].values.size()) index[--i] = 0;
+    if (i == 0) break;
+  }
+  return runs;
+}
+
+std::string csv_field(const std::string& text) {
+  std::string t = text;
+  std::replace(t.begin(), t.end(), '\n', ' ');
+  std::replace(t.begin(), t.end(), '\r', ' ');
+  if (t.find_first_of(",\"") == std::string::npos) return t;
+  std::string quoted = "\"";
+  for (char ch : t) quoted += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+  return quoted + "\"";
+}
+
+/// The scored models of every run: the base case's /compare/models (a sweep that changes the list itself still gets
+/// the base case's columns; the other models are in each run's summary.json).
+std::vector<std::string> scored_models(const SweepSpec& spec) {
+  const nlohmann::json* list = spec.base_document.contains("compare") ? &spec.base_document["compare"] : nullptr;
+  if (!list || !list->contains("models")) return core::CompareSpec{}.models;
+  std::vector<std::string> names;
+  for (const auto& m : (*list)["models"])
+    if (m.is_string()) names.push_back(m.get<std::string>());
+  return names;
+}
+
+std::vector<std::string> runs_csv_header(const SweepSpec& spec) {
+  std::vector<std::string> header{"run_id", "status"};
+  for (const auto& p : spec.parameters) header.push_back(p.pointer);
+  for (const auto& c : compare_row_columns(scored_models(spec))) header.push_back(c);
+  header.push_back("wall_seconds");
+  header.push_back("error");
+  return header;
+}
+
+namespace {
+
+std::string join_row(const std::vector<std::string>& fields) {
+  std::string line;
+  for (std::size_t i = 0; i < fields.size(); ++i) line += (i ? "," : "") + csv_field(fields[i]);
+  return line + "\n";
+}
+
+/// The first `n` fields of a row written by join_row (the run id and status are never quoted).
+std::vector<std::string> leading_fields(const std::string& line, std::size_t n) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (out.size() < n && start <= line.size()) {
+    const std::size_t comma = line.find(',', start);
+    out.push_back(line.substr(start, comma == std::string::npos ? std::string::npos : comma - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+/// write(2) the whole buffer, then fsync: a row reaches the disk whole or, after a crash, as a tail without
+/// its newline that the next RunsCsv removes.
+void append_whole(const std::string& path, const std::string& text) {
+  const int fd = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CREAT | O_CLOEXEC, 0644);
+  if (fd < 0) throw std::runtime_error(fmt::format("cannot open {} for appending: {}", path, std::strerror(errno)));
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      const int err = errno;
+      ::close(fd);
+      throw std::runtime_error(fmt::format("appending to {} failed: {}", path, std::strerror(err)));
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  const bool synced = ::fsync(fd) == 0;
+  const int err = errno;
+  if (::close(fd) != 0 || !synced)
+    throw std::runtime_error(fmt::format("appending to {} failed: {}", path, std::strerror(err)));
+}
+
+}  // namespace
+
+RunsCsv::RunsCsv(const std::string& path, const std::vector<std::string>& header)
+    : path_(path), columns_(header.size()) {
+  const std::string expected_header = join_row(header);
+  std::string text;
+  if (fs::exists(path)) {
+    std::ifstream in(path, std::ios::binary);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (!in.good() && !in.eof()) throw std::runtime_error("cannot read " + path);
+  }
+  if (!text.empty() && text.back() != '\n') {
+    // A crash during an append left a row without its newline: drop it (that run reruns).
+    const std::size_t keep = text.rfind('\n') == std::string::npos ? 0 : text.rfind('\n') + 1;
+    fs::resize_file(path, keep);
+    text.resize(keep);
+    repaired_ = true;
+  }
+  if (text.empty()) {
+    append_whole(path, expected_header);
+    return;
+  }
+  std::istringstream lines(text);
+  std::string line;
+  std::getline(lines, line);
+  if (line + "\n" != expected_header)
+    throw std::runtime_error(fmt::format("{} has other columns than this sweep ({}): it belongs to another sweep; "
+                                         "move it away or choose another --out",
+                                         path, line.substr(0, 120)));
+  while (std::getline(lines, line)) {
+    const auto f = leading_fields(line, 2);
+    if (f.size() == 2) rows_.emplace_back(f[0], f[1]);
+  }
+}
+
+std::string RunsCsv::last_status(const std::string& run_id) const {
+  for (auto it = rows_.rbegin(); it != rows_.rend(); ++it)
+    if (it->first == run_id) return it->second;
+  return "";
+}
+
+void RunsCsv::append(const std::vector<std::string>& fields) {
+  if (fields.size() != columns_)
+    throw std::logic_error(fmt::format("runs.csv row with {} fields, expected {}", fields.size(), columns_));
+  append_whole(path_, join_row(fields));
+  rows_.emplace_back(fields[0], fields[1]);
+}
+
+bool SweepOptions::IsValid(std::string* why) const {
+  if (workers < 0) {
+    if (why) *why = "--workers must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot) {
+  return [tissue_binary, plot](const SweepRun&, const std::string& case_file, const std::string& run_dir,
+                               const std::string& log_file) {
+    RunOutcome outcome;
+    std::vector<std::string> argv{tissue_binary, "compare", case_file, "--out", run_dir};
+    if (!plot) argv.push_back("--no-plot");
+    const ProcessOutcome p = run_process(argv, log_file);
+    if (!p.ok()) {
+      // The child's own `error: ...` line says why; fall back on how it ended.
+      std::ifstream in(log_file);
+      std::string line, last_error;
+      while (std::getline(in, line))
+        if (line.rfind("error: ", 0) == 0) last_error = line.substr(7);
+      outcome.error = last_error.empty() ? p.error : last_error + " (" + p.error + ")";
+      return outcome;
+    }
+    std::ifstream in(fs::path(run_dir) / "summary.json");
+    outcome.summary = json::parse(in, nullptr, false);
+    outcome.ok = !outcome.summary.is_discarded();
+    if (!outcome.ok) outcome.error = "the run succeeded but its summary.json cannot be read";
+    return outcome;
+  };
+}
+
+SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options,
+                      const RunFunction& run_function) {
+  const fs::path out = options.out_dir.empty() ? fs::path("results/sweeps") / spec.name : fs::path(options.out_dir);
+  const std::vector<std::string> models = scored_models(spec);
+  fs::create_directories(out / "cases");
+  fs::create_directories(out / "runs");
+  fs::create_directories(out / "logs");
+  // One sweep per folder at a time: a second one would append the same runs twice.
+  const std::string lock_path = (out / ".sweep.lock").string();
+  const int lock = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+  if (lock < 0 || ::flock(lock, LOCK_EX | LOCK_NB) != 0) {
+    if (lock >= 0) ::close(lock);
+    throw std::runtime_error(fmt::format("another sweep is running in {} (it holds {})", out.string(), lock_path));
+  }
+  struct Unlock {
+    int fd;
+    ~Unlock() { ::close(fd); }
+  } unlock{lock};
+
+  RunsCsv csv((out / "runs.csv").string(), runs_csv_header(spec));
+  if (csv.repaired())
+    std::cerr << fmt::format("[sweep {}] removed a half-written last row from {} (that run reruns)\n", spec.name,
+                             (out / "runs.csv").string());
+  json copy = {{"sweep_file", spec.file}, {"base_case", spec.base_case_file}, {"name", spec.name}};
+  write_json_file((out / "sweep.json").string(), copy);
+
+  SweepReport report;
+  report.total = static_cast<int>(runs.size());
+  std::vector<const SweepRun*> pending;
+  for (const auto& run : runs) {
+    const std::string status = csv.last_status(run.id);
+    if (status == "ok" || (status == "failed" && !options.retry_failed))
+      ++report.skipped;
+    else
+      pending.push_back(&run);
+  }
+  const int workers = std::max(1, options.workers > 0 ? options.workers : spec.workers);
+  std::cerr << fmt::format("[sweep {}] {} runs: {} already done, {} to run with {} worker(s); rows go to {}\n",
+                           spec.name, report.total, report.skipped, pending.size(), workers,
+                           (out / "runs.csv").string());
+  Progress progress("sweep " + spec.name, static_cast<int>(pending.size()));
+  std::mutex mutex;
+  std::size_t next = 0;
+  const auto describe = [&](const SweepRun& run) {
+    std::string s;
+    for (std::size_t i = 0; i < spec.parameters.size(); ++i)
+      s += fmt::format("{}{} = {}", i ? ", " : "", spec.parameters[i].pointer, value_text(run.values[i]));
+    return s;
+  };
+  std::exception_ptr fatal;  // an append that failed: the record would be wrong, so the sweep stops
+  const auto worker = [&]() {
+    while (true) {
+      const SweepRun* run = nullptr;
+      {
+        std::lock_guard<std::mutex> guard(mutex);
+        if (next == pending.size() || fatal) return;
+        run = pending[next++];
+        std::cerr << fmt::format("[sweep {}] starting {} ({})\n", spec.name, run->id, describe(*run));
+      }
+      const std::string case_file = (out / "cases" / (run->id + ".json")).string();
+      const std::string run_dir = (out / "runs" / run->id).string();
+      const std::string log_file = (out / "logs" / (run->id + ".log")).string();
+      const auto t0 = std::chrono::steady_clock::now();
+      RunOutcome outcome;
+      try {
+        write_json_file(case_file, run->document);
+        fs::remove(log_file);
+        outcome = run_function(*run, case_file, run_dir, log_file);
+      } catch (const std::exception& e) {
+        outcome.ok = false;
+        outcome.error = e.what();
+      }
+      outcome.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      std::replace(outcome.error.begin(), outcome.error.end(), '\n', ' ');  // one line in runs.csv and progress
+      std::vector<std::string> row{run->id, outcome.ok ? "ok" : "failed"};
+      for (const auto& v : run->values) row.push_back(value_text(v));
+      const std::vector<std::string> values = outcome.ok ? compare_row_values(outcome.summary, models)
+                                                         : std::vector<std::string>(compare_row_columns(models).size());
+      row.insert(row.end(), values.begin(), values.end());
+      row.push_back(fmt::format("{:.3f}", outcome.wall_seconds));
+      row.push_back(outcome.ok ? "" : outcome.error);
+      std::lock_guard<std::mutex> guard(mutex);
+      try {
+        csv.append(row);
+      } catch (...) {
+        if (!fatal) fatal = std::current_exception();
+        return;
+      }
+      if (outcome.ok) {
+        ++report.succeeded;
+        const json& m = outcome.summary["models"];
+        std::string rmse;
+        for (const auto& name : models)
+          if (m.contains(name) && m[name]["rmse_mm"].is_number())
+            rmse += fmt::format("{}{} {:.4f} mm", rmse.empty() ? "" : ", ", name, m[name]["rmse_mm"].get<double>());
+        progress.step(fmt::format("{} ({}): ok, RMSE {}, {:.0f} s", run->id, describe(*run), rmse, outcome.wall_seconds));
+      } else {
+        ++report.failed;
+        progress.step(fmt::format("{} ({}): FAILED: {} (log: {})", run->id, describe(*run), outcome.error, log_file));
+      }
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int w = 0; w < std::min<int>(workers, static_cast<int>(pending.size())); ++w) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (fatal) std::rethrow_exception(fatal);
+  progress.done();
+  return report;
+}
+
+namespace {
+
+/// The current sweep's results, one row per run in product order (runs.csv is the append-only log; this is
+/// the view of the runs this sweep file defines now): summary.csv, summary.md and sweep.png.
+void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& runs, const fs::path& out, bool plot) {
+  RunsCsv csv((out / "runs.csv").string(), runs_csv_header(spec));
+  std::vector<std::string> header{"run_id", "status"};
+  for (const auto& p : spec.parameters) header.push_back(p.pointer);
+  const std::vector<std::string> models = scored_models(spec);
+  const std::vector<std::string> columns = compare_row_columns(models);
+  for (const auto& c : columns) header.push_back(c);
+  std::string summary_csv = join_row(header);
+  std::string md = fmt::format("# Sweep {}\n\n{}{}Produced by `tissue sweep {}` (base case {}). One row per run; "
+                               "RMSE of eq. 34 against the FEM reference, times in seconds.\n\n|",
+                               spec.name, spec.description, spec.description.empty() ? "" : "\n\n", spec.file,
+                               spec.base_case_file);
+  for (const auto& p : spec.parameters) md += " " + p.pointer + " |";
+  md += " status |";
+  for (const auto& m : models) md += fmt::format(" RMSE {} [mm] | {} / peak | without flagged, {} [mm] |", m, m, m);
+  md += " reference [s] |";
+  for (const auto& m : models) md += fmt::format(" {} [s] |", m);
+  md += " run |\n|";
+  for (std::size_t i = 0; i < spec.parameters.size() + 4 * models.size() + 3; ++i) md += "---|";
+  md += "\n";
+  for (const auto& run : runs) {
+    const std::string status = csv.last_status(run.id);
+    std::vector<std::string> row{run.id, status.empty() ? "not run" : status};
+    for (const auto& v : run.values) row.push_back(value_text(v));
+    std::vector<std::string> values(columns.size());
+    json summary;
+    if (status == "ok") {
+      std::ifstream in(out / "runs" / run.id / "summary.json");
+      summary = json::parse(in, nullptr, false);
+      if (!summary.is_discarded()) values = compare_row_values(summary, models);
+    }
+    row.insert(row.end(), values.begin(), values.end());
+    summary_csv += join_row(row);
+    md += "|";
+    for (const auto& v : run.values) md += " " + value_text(v) + " |";
+    const auto column = [&](const std::string& name) {
+      const std::string& v =
+          values[static_cast<std::size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin())];
+      return v.empty() ? std::string("–") : fmt::format("{:.4g}", std::stod(v));  // full precision in summary.csv
+    };
+    md += " " + row[1] + " |";
+    for (const auto& m : models)
+      md += fmt::format(" {} | {} | {} |", column(m + "_rmse_mm"), column(m + "_rmse_relative"),
+                        column(m + "_rmse_unflagged_mm"));
+    md += " " + column("fem_seconds") + " |";
+    for (const auto& m : models) md += " " + column(m + "_seconds") + " |";
+    md += fmt::format(" {} |\n", status == "failed" ? "failed: logs/" + run.id + ".log" : "runs/" + run.id);
+  }
+  write_replacing((out / "summary.csv").string(), summary_csv);
+  write_replacing((out / "summary.md").string(), md);
+  if (!plot) return;
+  const std::string log = (out / "plot.log").string();
+  const ProcessOutcome p =
+      run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_sweep.py", (out / "summary.csv").string(),
+                   (out / "sweep.png").string(), "--x", spec.parameters.front().pointer, "--title", spec.name},
+                  log);
+  if (p.ok())
+    fs::remove(log);
+  else
+    std::cerr << fmt::format("warning: sweep.png not written ({}); see {}\n", p.error, log);
+}
+
+}  // namespace
+
+int run_sweep_command(const std::string& sweep_file, const SweepOptions& options, bool dry_run,
+                      const std::string& tissue_binary) {
+  std::string why;
+  if (!options.IsValid(&why)) throw std::invalid_argument("sweep: " + why);
+  const SweepSpec spec = load_sweep(sweep_file);
+  const std::vector<SweepRun> runs = expand_sweep(spec);  // every case validated before anything runs
+  const fs::path out = options.out_dir.empty() ? fs::path("results/sweeps") / spec.name : fs::path(options.out_dir);
+  if (dry_run) {
+    std::cout << fmt::format("{}: {} valid runs (results would go to {}):\n", sweep_file, runs.size(), out.string());
+    for (const auto& run : runs) {
+      std::cout << "  " << run.id;
+      for (std::size_t i = 0; i < spec.parameters.size(); ++i)
+        std::cout << fmt::format("  {} = {}", spec.parameters[i].pointer, value_text(run.values[i]));
+      std::cout << "\n";
+    }
+    return 0;
+  }
+  SweepOptions opt = options;
+  opt.out_dir = out.string();
+  const SweepReport report = run_sweep(spec, runs, opt, compare_in_child_process(tissue_binary, false));
+  write_sweep_summary(spec, runs, out, options.plot);
+  std::cout << fmt::format("{}: {} runs, {} skipped (done before), {} succeeded, {} failed; wrote {}\n", spec.name,
+                           report.total, report.skipped, report.succeeded, report.failed,
+                           (out / "summary.md").string());
+  return report.failed == 0 ? 0 : 1;
+}
+
+}  // namespace experiments

@@ -1,0 +1,153 @@
+// The model interface and its registry (experiments/models/): the names a case may list in /compare, the roles the
+// tables print, the refusals of a bad list, the floor model's RMSE (the reference's own RMS displacement), and the
+// sweep's columns, one group per scored model.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "core/case.hpp"
+#include "core/case_error.hpp"
+#include "experiments/comparator/compare.hpp"
+#include "experiments/models/model_registry.hpp"
+
+namespace {
+
+using nlohmann::json;
+
+json shipped_case() {
+  std::ifstream in(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
+  return json::parse(in);
+}
+
+/// The CaseError parse_case, or the model list, raises for `document`, as "path: message".
+std::string refusal(const json& document) {
+  try {
+    const core::Case c = core::parse_case(document, "case.json");
+    experiments::models_of_case(c);
+  } catch (const core::CaseError& e) {
+    return e.json_path() + ": " + e.what();
+  }
+  return "accepted";
+}
+
+TEST(ModelRegistry, KnowsEveryModelByNameWithItsRole) {
+  const std::vector<std::string> names = experiments::registered_model_names();
+  for (const char* name : {"fem", "enrichment", "visibility", "zero"})
+    EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
+  EXPECT_EQ(experiments::make_model("no such model"), nullptr);
+  EXPECT_EQ(experiments::role_kind(experiments::make_model("fem")->role()), "reference");
+  EXPECT_EQ(experiments::role_kind(experiments::make_model("enrichment")->role()), "proposed");
+  EXPECT_EQ(experiments::role_kind(experiments::make_model("visibility")->role()), "baseline");
+  EXPECT_EQ(experiments::role_kind(experiments::make_model("zero")->role()), "floor");
+  for (const auto& name : names) {
+    const auto m = experiments::make_model(name);
+    EXPECT_EQ(m->name(), name);
+    EXPECT_FALSE(m->description().empty()) << name;
+  }
+}
+
+TEST(ModelRegistry, TheDefaultListIsTheReferenceAndThePapersTwoVariants) {
+  const core::Case c = core::parse_case(shipped_case(), "lung_small.json");
+  const auto models = experiments::models_of_case(c);
+  ASSERT_EQ(models.size(), 3u);
+  EXPECT_EQ(models[0]->name(), "fem");
+  EXPECT_EQ(models[1]->name(), "enrichment");
+  EXPECT_EQ(models[2]->name(), "visibility");
+  // Without a cut the two variants are one model, solved once; with a cut they differ.
+  EXPECT_EQ(models[2]->same_as(c), "enrichment");
+  EXPECT_EQ(models[1]->same_as(c), "");
+  json cut = shipped_case();
+  std::ifstream in(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_large.json");
+  const core::Case cut_case = core::parse_case(json::parse(in), std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_large.json");
+  ASSERT_TRUE(cut_case.cut.has_value());
+  EXPECT_EQ(models[2]->same_as(cut_case), "");
+}
+
+TEST(ModelRegistry, ACaseNamesItsModelsAndBadListsAreRefusedWithThePath) {
+  json doc = shipped_case();
+  doc["compare"] = {{"models", {"zero", "enrichment"}}};
+  const core::Case c = core::parse_case(doc, "case.json");
+  const auto models = experiments::models_of_case(c);
+  ASSERT_EQ(models.size(), 3u);
+  EXPECT_EQ(models[1]->name(), "zero");
+  EXPECT_EQ(models[2]->name(), "enrichment");
+
+  doc["compare"] = {{"models", {"enrichment", "efg2"}}};
+  std::string why = refusal(doc);
+  EXPECT_NE(why.find("/compare/models/1"), std::string::npos) << why;
+  EXPECT_NE(why.find("efg2"), std::string::npos) << why;
+  EXPECT_NE(why.find("fem, enrichment, visibility"), std::string::npos) << why;  // names the registered models
+
+  doc["compare"] = {{"models", {"zero", "zero"}}};
+  why = refusal(doc);
+  EXPECT_NE(why.find("/compare/models/1"), std::string::npos) << why;
+  EXPECT_NE(why.find("listed twice"), std::string::npos) << why;
+
+  doc["compare"] = {{"models", {"fem"}}};
+  why = refusal(doc);
+  EXPECT_NE(why.find("/compare/models/0"), std::string::npos) << why;
+  EXPECT_NE(why.find("other than the reference"), std::string::npos) << why;
+
+  doc["compare"] = {{"models", json::array()}};
+  EXPECT_NE(refusal(doc).find("/compare/models"), std::string::npos) << refusal(doc);
+  doc["compare"] = {{"models", {3}}};
+  EXPECT_NE(refusal(doc).find("/compare/models/0"), std::string::npos) << refusal(doc);
+  doc["compare"] = {{"reference", "nothing"}};
+  EXPECT_NE(refusal(doc).find("/compare/reference"), std::string::npos) << refusal(doc);
+  doc["compare"] = {{"modles", {"zero"}}};
+  EXPECT_NE(refusal(doc).find("/compare/modles"), std::string::npos) << refusal(doc);
+}
+
+TEST(ZeroModel, ItsRmseIsTheReferencesOwnRmsDisplacement) {
+  core::Geometry g;
+  g.sample_points.resize(4, 3);
+  g.sample_points << 0, 0, 0, 0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01;
+  const core::Case c = core::parse_case(shipped_case(), "lung_small.json");
+  experiments::ModelResult zero = experiments::make_model("zero")->solve(c, g, {});
+  ASSERT_EQ(zero.sample_displacements.rows(), 4);
+  EXPECT_EQ(zero.sample_displacements.cwiseAbs().maxCoeff(), 0.0);
+
+  experiments::Comparison cmp;
+  cmp.sample_points = g.sample_points;
+  cmp.reference.sample_displacements.resize(4, 3);
+  cmp.reference.sample_displacements << 0.003, 0.004, 0, 0, 0, 0.001, 0.002, 0, 0, 0, 0, 0;  // 5, 1, 2, 0 mm
+  zero.role = experiments::make_model("zero")->role();
+  cmp.models = {{"zero", zero}};
+  cmp.diagnostics = experiments::diagnose_samples(g.sample_points, Eigen::Vector3d(1, 1, 1), 0.012, std::nullopt,
+                                                  cmp.rules);
+  const json s = experiments::comparison_summary(cmp);
+  EXPECT_NEAR(s["models"]["zero"]["rmse_mm"].get<double>(), std::sqrt((25.0 + 1.0 + 4.0 + 0.0) / 4.0), 1e-12);
+  EXPECT_NEAR(s["models"]["zero"]["rmse_relative_to_peak"].get<double>(), std::sqrt(30.0 / 4.0) / 5.0, 1e-12);
+  EXPECT_EQ(s["models"]["zero"]["role"], "floor: the undeformed body, u = 0");
+  EXPECT_FALSE(s.contains("difference_mm"));  // no proposed model and baseline
+}
+
+TEST(SweepColumns, OneGroupPerScoredModelAndTheDefaultListKeepsTheDocumentedColumns) {
+  const std::vector<std::string> documented{
+      "n_samples",          "n_flagged",          "fem_peak_mm",       "fem_error_bar_mm",
+      "enrichment_rmse_mm", "enrichment_rmse_relative",                "enrichment_rmse_unflagged_mm",
+      "visibility_rmse_mm", "visibility_rmse_relative",                "visibility_rmse_unflagged_mm",
+      "difference_mm",      "geometry_seconds",   "fem_seconds",       "enrichment_seconds",
+      "visibility_seconds", "fem_dofs",           "meshless_nodes"};
+  EXPECT_EQ(experiments::compare_row_columns(), documented);
+  const auto columns = experiments::compare_row_columns({"zero", "lrpim"});
+  for (const char* c : {"zero_rmse_mm", "zero_seconds", "lrpim_rmse_relative", "lrpim_rmse_unflagged_mm"})
+    EXPECT_NE(std::find(columns.begin(), columns.end(), c), columns.end()) << c;
+  const json summary = {{"n_samples", 2},
+                        {"flagged_samples", json::array()},
+                        {"reference", {{"peak_sample_displacement_mm", 3.0}}},
+                        {"models", {{"zero", {{"rmse_mm", 1.5}, {"timings", nullptr}}}}}};
+  const auto values = experiments::compare_row_values(summary, {"zero", "lrpim"});
+  ASSERT_EQ(values.size(), columns.size());
+  const auto at = [&](const std::string& name) {
+    return values[static_cast<std::size_t>(std::find(columns.begin(), columns.end(), name) - columns.begin())];
+  };
+  EXPECT_EQ(at("zero_rmse_mm"), "1.5");
+  EXPECT_EQ(at("lrpim_rmse_mm"), "");  // not in this summary: an empty cell, never a failure
+  EXPECT_EQ(at("fem_peak_mm"), "3");
+}
+
+}  // namespace
