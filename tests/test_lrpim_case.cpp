@@ -11,6 +11,7 @@
 #include "core/case_error.hpp"
 #include "core/geometry.hpp"
 #include "meshless/lrpim/lrpim_case.hpp"
+#include "meshless/lrpim/lrpim_verification.hpp"
 #include "meshless/verification/box_mesh.hpp"
 
 namespace meshless::lrpim {
@@ -85,12 +86,14 @@ TEST(LrpimCase, ElasticallySupportedBarMatchesTheClosedForm) {
   LrpimCaseRun run;
   const double mumps = run_bar(core::FixedRegionSpec::Support::elastic, LrpimLinearSolver::mumps, &run);
   const double sparse_lu = run_bar(core::FixedRegionSpec::Support::elastic, LrpimLinearSolver::sparse_lu);
+  const double krylov = run_bar(core::FixedRegionSpec::Support::elastic, LrpimLinearSolver::petsc_krylov);
   std::cout << "elastic support: samples off the closed form by " << mumps << " (MUMPS), " << sparse_lu
-            << " (SparseLU) of the tip displacement; " << run.n_nodes << " nodes, "
+            << " (SparseLU), " << krylov << " (PETSc GMRES + ILU) of the tip displacement; " << run.n_nodes << " nodes, "
             << run.details["points"].dump() << ", factorisations " << run.details["factorisations"] << "\n";
   // A linear field in a linear-reproducing model with the divergence correction: round-off and Newton's 1e-12.
   EXPECT_LT(mumps, 1e-12);      // 8.4e-14
   EXPECT_LT(sparse_lu, 1e-12);  // 8.6e-14
+  EXPECT_LT(krylov, 1e-10);
   // The load's total force is the case's: traction (force / this cloud's load-patch area) times that area.
   EXPECT_NEAR(run.details["load"]["total_force_n"][0].get<double>(), kStress * kSide * kSide, 1e-15);
   EXPECT_NEAR(run.details["load"]["patch_area_m2"].get<double>(), kSide * kSide, 1e-18);
@@ -122,6 +125,19 @@ TEST(LrpimCase, CutCaseIsRefusedWithWhatToDo) {
     EXPECT_NE(std::string(e.what()).find("no crack treatment"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("remove /cut"), std::string::npos) << e.what();
   }
+}
+
+TEST(LrpimVerification, QuickSetPassesAndReportsEveryFigure) {
+  // What `tissue verify lrpim --quick` reports (meshless/lrpim/lrpim_verification.hpp).
+  const nlohmann::json v = run_lrpim_verification(true);
+  std::cout << v.dump(1) << "\n";
+  EXPECT_TRUE(v["quick"].get<bool>());
+  for (const char* item : {"rpim_invariants", "patch_test_box", "patch_test_cloud_surface", "cantilever",
+                           "creep_bar_k0", "creep_bar_k2"})
+    EXPECT_TRUE(v[item]["passed"].get<bool>()) << item << ": " << v[item].dump();
+  EXPECT_TRUE(v["passed"].get<bool>());
+  EXPECT_GT(v["patch_test_uncorrected"]["displacement"].get<double>(), 1e-4);  // the correction is what passes it
+  EXPECT_EQ(v["cantilever"]["levels"].size(), 2u);
 }
 
 }  // namespace

@@ -46,8 +46,16 @@ void print_run(const std::string& label, const LrpimCaseRun& run, const Score& s
 TEST(LrpimLung, LungSmallAgainstTheFemReference) {
   const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
   const core::Geometry g = core::build_geometry(c);
+  LrpimCaseOptions options;
+  options.linear_solver = LrpimLinearSolver::petsc_krylov;
+  options.on_step = [](const LrpimStepReport& s) {
+    std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
+              << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds
+              << " s" << std::endl;
+  };
+  const LrpimCaseRun run = run_lrpim_case(c, g, options);
+  std::cout << "LRPIM set-up " << run.setup_seconds << " s" << std::endl;
   const reference_fem::FemRunResult fem = reference_fem::run_case(c, g);
-  const LrpimCaseRun run = run_lrpim_case(c, g);
   const Score s = score(run.sample_displacements, fem.sample_displacements);
   print_run("lung_small", run, s);
   for (Eigen::Index i = 0; i < fem.sample_displacements.rows(); ++i)

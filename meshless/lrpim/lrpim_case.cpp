@@ -71,6 +71,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.max_newton_iterations = options.max_newton_iterations;
   p.refactor_contraction = options.refactor_contraction;
   p.linear_solver = options.linear_solver;
+  p.krylov_options = options.krylov_options;
   return p;
 }
 
@@ -129,7 +130,9 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                      {"newton_tolerance", p.newton_tolerance},
                      {"refactor_contraction", p.refactor_contraction},
                      {"linear_solver", p.linear_solver == LrpimLinearSolver::mumps ? "MUMPS sparse LU (METIS)"
-                                                                                    : "Eigen SparseLU (COLAMD)"}};
+                                       : p.linear_solver == LrpimLinearSolver::petsc_krylov
+                                           ? "PETSc " + p.krylov_options
+                                           : "Eigen SparseLU (COLAMD)"}};
   d["support"] = c.fixed_region.support == core::FixedRegionSpec::Support::elastic ? "elastic (Robin term)"
                                                                                      : "clamp (nodal u = 0)";
   d["load"] = {{"patch_area_m2", program.patch_area},
@@ -139,6 +142,7 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                 {program.traction.x() * load_area, program.traction.y() * load_area, program.traction.z() * load_area}}};
   d["seconds"] = {{"setup", st.setup_seconds}, {"assembly", st.assembly_seconds}, {"solve", st.solve_seconds}};
   d["factorisations"] = st.factorisations;
+  d["krylov_iterations"] = st.krylov_iterations;
   d["peak_resident_bytes"] = peak_resident_bytes();
   return run;
 }

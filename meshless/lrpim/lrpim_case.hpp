@@ -38,6 +38,7 @@ struct LrpimCaseOptions {
   double alpha_q = 1.5;  ///< r_q / node spacing
   RpimParameters rpim;   ///< the literature's MQ (q 1.03, alpha_c 4, 20 nodes)
   LrpimLinearSolver linear_solver = LrpimLinearSolver::mumps;
+  std::string krylov_options = LrpimProblem{}.krylov_options;  ///< petsc_krylov only
   double newton_tolerance = 1e-8;     ///< as the EFG's EfgOptions::newton_tolerance
   double refactor_contraction = 0.2;  ///< modified Newton, as the EFG's (LrpimProblem::refactor_contraction)
   int max_newton_iterations = 25;

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "meshless/solvers/mumps_lu.hpp"
+#include "meshless/solvers/petsc_krylov_solver.hpp"
 
 namespace meshless::lrpim {
 
@@ -33,11 +34,17 @@ Eigen::Matrix<double, 6, 3> b_block(const Eigen::Vector3d& g) {
 
 }  // namespace
 
-// The factorisation of the last tangent: MUMPS (row-major matrix as assembled) or Eigen's SparseLU (a column-major
-// copy), chosen by LrpimProblem::linear_solver.
+// The factorisation of the last tangent: MUMPS (row-major matrix as assembled), Eigen's SparseLU (a column-major
+// copy), or a PETSc Krylov method's preconditioner (which references the tangent's arrays: the model only rewrites
+// them right before the next factorise), chosen by LrpimProblem::linear_solver.
 struct LrpimModel::Solver {
   LrpimLinearSolver kind;
   std::unique_ptr<MumpsLu> mumps;
+  std::unique_ptr<PetscKrylovSolver> krylov;
+  const core::PointMatrix* nodes = nullptr;
+  std::string krylov_options;
+  double krylov_tolerance = 1e-9;
+  int krylov_iterations = 0;
   Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
   bool analysed = false, factored = false;
   std::string name;
@@ -46,6 +53,10 @@ struct LrpimModel::Solver {
     if (kind == LrpimLinearSolver::mumps) {
       if (!mumps) mumps = std::make_unique<MumpsLu>(name);
       mumps->factorise(k);
+    } else if (kind == LrpimLinearSolver::petsc_krylov) {
+      if (!krylov)
+        krylov = std::make_unique<PetscKrylovSolver>(*nodes, krylov_options, krylov_tolerance, 20000, 0.0, false);
+      krylov->set_matrix(k);
     } else {
       Eigen::SparseMatrix<double> c = k;
       c.makeCompressed();
@@ -59,7 +70,15 @@ struct LrpimModel::Solver {
     factored = true;
   }
   Eigen::VectorXd solve(const Eigen::VectorXd& r) {
-    Eigen::VectorXd x = kind == LrpimLinearSolver::mumps ? mumps->solve(r) : Eigen::VectorXd(lu.solve(r));
+    Eigen::VectorXd x;
+    if (kind == LrpimLinearSolver::mumps) {
+      x = mumps->solve(r);
+    } else if (kind == LrpimLinearSolver::petsc_krylov) {
+      x = krylov->solve(r);
+      krylov_iterations += krylov->last_iterations();
+    } else {
+      x = lu.solve(r);
+    }
     if (!x.allFinite()) throw std::runtime_error("LrpimModel '" + name + "': the linear solve gave non-finite values");
     return x;
   }
@@ -206,6 +225,9 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   solver_ = std::make_unique<Solver>();
   solver_->kind = problem_.linear_solver;
   solver_->name = problem_.name;
+  solver_->nodes = &problem_.nodes;
+  solver_->krylov_options = problem_.krylov_options;
+  solver_->krylov_tolerance = problem_.krylov_tolerance;
   statistics_.setup_seconds = seconds_since(t0);
 }
 
@@ -373,6 +395,7 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
     statistics_.assembly_seconds += rec.assembly_seconds;
     statistics_.solve_seconds += rec.solve_seconds;
     statistics_.factorisations += rec.factorisations;
+    statistics_.krylov_iterations = solver_->krylov_iterations;
     steps_.push_back(rec);
     if (on_step) on_step(*this, rec);
   }

@@ -38,7 +38,7 @@ struct LrpimStepRecord {
   int newton_iterations = 0;
   double residual = 0.0;  ///< final ||R|| / reference
   std::vector<double> residuals;  ///< ||R|| / reference at every iteration (the first before any solve)
-  int factorisations = 0;         ///< tangents factorised in this step
+  int factorisations = 0;  ///< tangents factorised in this step (preconditioner set-ups with petsc_krylov)
   double wall_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;  ///< this step's
 };
 
@@ -46,7 +46,8 @@ struct LrpimStatistics {
   int num_nodes = 0, num_constrained_nodes = 0;
   int num_volume_points = 0, num_reaction_points = 0, num_traction_points = 0, num_support_points = 0;
   long long matrix_entries = 0;  ///< stored entries of the tangent
-  int factorisations = 0;
+  int factorisations = 0;           ///< or preconditioner set-ups (petsc_krylov)
+  long long krylov_iterations = 0;  ///< petsc_krylov: iterations of all solves
   double min_rcond = 1.0;  ///< smallest rcond of G met while tabulating
   /// max over nodes of |int v n dA - int grad v dV| * r_q / int dV before the correction (0 for an exact rule)
   double divergence_defect = 0.0;

@@ -32,6 +32,8 @@ enum class FaceCondition {
 enum class LrpimLinearSolver {
   sparse_lu,  ///< Eigen::SparseLU (COLAMD), no MPI needed: the small verification problems
   mumps,      ///< MUMPS sparse LU with METIS (meshless/solvers/mumps_lu.hpp); needs MPI initialised
+  petsc_krylov,  ///< a PETSc Krylov method (LrpimProblem::krylov_options, meshless/solvers/petsc_krylov_solver.hpp)
+                 ///< whose preconditioner is built once per "factorisation"; needs PETSc initialised
 };
 
 struct LrpimProblem {
@@ -67,6 +69,9 @@ struct LrpimProblem {
   /// EFG's rule, EfgOptions::refactor_contraction): a nearly linear case then factorises once or twice per run.
   double refactor_contraction = 0.0;
   LrpimLinearSolver linear_solver = LrpimLinearSolver::sparse_lu;
+  /// petsc_krylov: PETSc options and the relative tolerance of each solve (Newton's own test decides convergence).
+  std::string krylov_options = "-ksp_type gmres -ksp_gmres_restart 200 -pc_type ilu";
+  double krylov_tolerance = 1e-9;
 };
 
 }  // namespace meshless::lrpim

@@ -3,6 +3,7 @@
 // (meshless/verification/verification_problems.hpp): RPIM invariants, the linear patch test, the Timoshenko
 // cantilever's convergence rates, and the closed-form creep of a bar at k = 0 and k != 0. Node clouds are the
 // vertices of meshless::make_box_mesh; its tets are not used.
+#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "meshless/lrpim/rpim_shape_functions.hpp"
@@ -64,5 +65,14 @@ struct LrpimCreepReport {
 /// The stress is uniaxial and uniform, so the law is linear in N(eps) = eps + k eps^2 (docs/MATERIAL.md §1.2):
 /// N(t) = sigma0/K1 + sigma0/K2 (1 - exp(-K2 t/eta)) and eps = (sqrt(1 + 4 k N) - 1) / (2 k) (eps = N at k = 0).
 LrpimCreepReport run_lrpim_creep_bar(double k = 0.0, int steps = 40);
+
+/// The verification set of `tissue verify lrpim`, every figure as JSON: RPIM invariants, the patch test (the box's
+/// 12 triangles with and without the divergence correction, and the cloud's own boundary triangles), the cantilever's
+/// errors and fitted rates, and the creep bar at k = 0 and k = 2. Each item carries its figures, the bound the tests
+/// assert (tests/test_lrpim.cpp) and `passed`; the top level has `passed` (all items) and `seconds`.
+/// quick: a smaller set for a smoke run (invariants at 500 points, the patch tests at 4 cells, the cantilever at 2
+/// and 3 cells, the creep bars over 10 steps), whose bounds are looser where the smaller set is less accurate.
+/// Thread safety: uses OpenMP inside; call from one thread. No MPI needed (SparseLU).
+nlohmann::json run_lrpim_verification(bool quick);
 
 }  // namespace meshless::lrpim
