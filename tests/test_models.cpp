@@ -35,7 +35,7 @@ std::string refusal(const json& document) {
 
 TEST(ModelRegistry, KnowsEveryModelByNameWithItsRole) {
   const std::vector<std::string> names = experiments::registered_model_names();
-  for (const char* name : {"fem", "enrichment", "visibility", "zero"})
+  for (const char* name : {"fem", "enrichment", "visibility", "lrpim", "zero"})
     EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
   EXPECT_EQ(experiments::make_model("no such model"), nullptr);
   EXPECT_EQ(experiments::role_kind(experiments::make_model("fem")->role()), "reference");
@@ -64,6 +64,12 @@ TEST(ModelRegistry, TheDefaultListIsTheReferenceAndThePapersTwoVariants) {
   const core::Case cut_case = core::parse_case(json::parse(in), std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_large.json");
   ASSERT_TRUE(cut_case.cut.has_value());
   EXPECT_EQ(models[2]->same_as(cut_case), "");
+  // The LRPIM model has no treatment of a cut: it says so, and solves the uncut case.
+  const auto lrpim = experiments::make_model("lrpim");
+  EXPECT_EQ(lrpim->cannot_solve(c), "");
+  EXPECT_NE(lrpim->cannot_solve(cut_case).find("no treatment of a cut"), std::string::npos);
+  EXPECT_TRUE(lrpim->needs_node_cloud());
+  EXPECT_FALSE(lrpim->needs_fem_mesh());
 }
 
 TEST(ModelRegistry, ACaseNamesItsModelsAndBadListsAreRefusedWithThePath) {
@@ -123,6 +129,16 @@ TEST(ZeroModel, ItsRmseIsTheReferencesOwnRmsDisplacement) {
   EXPECT_NEAR(s["models"]["zero"]["rmse_relative_to_peak"].get<double>(), std::sqrt(30.0 / 4.0) / 5.0, 1e-12);
   EXPECT_EQ(s["models"]["zero"]["role"], "floor: the undeformed body, u = 0");
   EXPECT_FALSE(s.contains("difference_mm"));  // no proposed model and baseline
+
+  // A model that could not solve the case, or failed, is reported with its reason, never dropped silently.
+  cmp.not_solved = {{"lrpim", "Fig. 9 baseline", "the LRPIM model has no treatment of a cut"},
+                    {"other", "proposed", "failed: Newton did not converge"}};
+  const json t = experiments::comparison_summary(cmp);
+  EXPECT_EQ(t["not_solved"]["lrpim"]["why"], "the LRPIM model has no treatment of a cut");
+  const std::string md = experiments::comparison_table_md(cmp, t);
+  EXPECT_NE(md.find("lrpim (Fig. 9 baseline): not solved: the LRPIM model has no treatment of a cut."), std::string::npos)
+      << md;
+  EXPECT_NE(md.find("other (proposed): failed: Newton did not converge."), std::string::npos) << md;
 }
 
 TEST(SweepColumns, OneGroupPerScoredModelAndTheDefaultListKeepsTheDocumentedColumns) {

@@ -252,7 +252,8 @@ std::string comparison_table_md(const Comparison& c, const json& s) {
     md += fmt::format("{}{} ({})", i ? "; " : "", c.models[i].first,
                       is_external(c.models[i].second) ? std::string("external") : c.models[i].second.role);
   md += ".\n";
-  for (const auto& n : c.not_solved) md += fmt::format("\n{} ({}): not solved: {}.\n", n.name, n.role, n.why);
+  for (const auto& n : c.not_solved)
+    md += fmt::format("\n{} ({}): {}{}.\n", n.name, n.role, n.why.rfind("failed", 0) == 0 ? "" : "not solved: ", n.why);
   for (const auto& [name, m] : s["models"].items())
     if (m["details"].contains("solved_as_why"))
       md += fmt::format("\n{}: {}.\n", name, m["details"]["solved_as_why"].get<std::string>());
@@ -431,7 +432,14 @@ void solve_uncut(const core::Case& c, const core::Geometry& g, const std::vector
       cmp->uncut_samples.emplace_back(m->name(), std::move(u));
       continue;
     }
-    cmp->uncut_samples.emplace_back(m->name(), solve(*m, std::string()).sample_displacements);
+    if (std::any_of(cmp->not_solved.begin(), cmp->not_solved.end(), [&](const NotSolved& n) { return n.name == m->name(); }))
+      continue;  // its cut solve failed: no cut effect to take
+    try {
+      cmp->uncut_samples.emplace_back(m->name(), solve(*m, std::string()).sample_displacements);
+    } catch (const std::exception& e) {
+      if (m.get() == models.front().get()) throw;  // the reference's effect is what every other is scored against
+      progress->step(fmt::format("cut effect: uncut {}: FAILED: {}", m->name(), e.what()));
+    }
   }
 }
 
@@ -539,7 +547,15 @@ int run_compare(const std::string& config, const CompareOptions& options) {
     const std::string same = m.same_as(c);
     const auto earlier = std::find_if(cmp.models.begin(), cmp.models.end(), [&](const auto& e) { return e.first == same; });
     if (same.empty() || earlier == cmp.models.end()) {
-      cmp.models.emplace_back(m.name(), solve(m, vtu_prefix(m.name())));
+      // A scored model that fails is reported with its error and the comparison goes on: the other models' figures
+      // stand (the reference's failure ends the comparison, since nothing can be scored without it).
+      try {
+        cmp.models.emplace_back(m.name(), solve(m, vtu_prefix(m.name())));
+      } catch (const std::exception& e) {
+        progress.step(fmt::format("{}: FAILED: {}", m.name(), e.what()));
+        cmp.not_solved.push_back({m.name(), m.role(), std::string("failed: ") + e.what()});
+        std::filesystem::remove_all(out.file(m.name()));
+      }
       continue;
     }
     // The same model as an earlier one on this case, bit for bit: its result (and its VTU) stand for this one too.

@@ -8,6 +8,7 @@
 #include "core/case_error.hpp"
 #include "experiments/models/efg/efg_variant_model.hpp"
 #include "experiments/models/fem/fem_reference_model.hpp"
+#include "experiments/models/lrpim/lrpim_case_model.hpp"
 #include "experiments/models/zero/zero_model.hpp"
 
 namespace experiments {
@@ -21,6 +22,7 @@ const std::vector<Factory>& factories() {
       [] { return std::make_unique<FemReferenceModel>(); },
       [] { return std::make_unique<EfgVariantModel>(EfgVariantModel::Variant::enrichment); },
       [] { return std::make_unique<EfgVariantModel>(EfgVariantModel::Variant::visibility); },
+      [] { return std::make_unique<LrpimCaseModel>(); },
       [] { return std::make_unique<ZeroModel>(); },
   };
   return registry;

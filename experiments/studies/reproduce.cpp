@@ -151,8 +151,8 @@ std::string table1_md(const json& rows) {
         md += " – |";
         continue;
       }
-      if (m->contains("not_solved")) {
-        md += " not solved |";
+      if (m->contains("not_solved")) {  // a model that cannot solve the case, or whose solve failed (its error below)
+        md += m->at("not_solved").get<std::string>().rfind("failed", 0) == 0 ? " failed |" : " not solved |";
         continue;
       }
       md += fmt::format(" {:.4f} ({:.1f} %) |", m->at("rmse_mm").get<double>(), 100 * m->at("relative").get<double>());
@@ -178,7 +178,7 @@ std::string table1_md(const json& rows) {
   for (const json& r : rows)
     for (const json& m : r.at("models"))
       if (m.contains("not_solved"))
-        md += fmt::format("\n{}, {}: not solved: {}.\n", r.at("label").get<std::string>(), m.at("name").get<std::string>(),
+        md += fmt::format("\n{}, {}: {}.\n", r.at("label").get<std::string>(), m.at("name").get<std::string>(),
                           m.at("not_solved").get<std::string>());
   md += "\nThe paper's Table 1 is for its own lung models (§5.4); ours are the lung cases named in the plan, on another "
         "lung, support and load, so compare the ranking and the relative size of the models, not the millimetres. "
