@@ -296,11 +296,11 @@ std::vector<core::KelvinState> carried_history(const ShapeTable& before, const s
     const int c = before.cells[q];
     if (c < cells && has_new_points[c]) old_points_of_cell[c].push_back(q);
   }
+  parallel_for(now.size(), 4096, [&](int q) {
+    if (same[q] >= 0) carried[q] = states[same[q]];
+  });
   for (int q = 0; q < now.size(); ++q) {
-    if (same[q] >= 0) {
-      carried[q] = states[same[q]];
-      continue;
-    }
+    if (same[q] >= 0) continue;
     double best = std::numeric_limits<double>::infinity();
     for (int old : old_points_of_cell[now.cells[q]]) {
       const double d = (before.points.row(old) - now.points.row(q)).squaredNorm();
