@@ -4,6 +4,7 @@
 // (../shared/data/lung, configs/lung_stl.json, a clamp) when that folder exists. Label `long`.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 
@@ -14,6 +15,22 @@
 
 namespace meshless::lrpim {
 namespace {
+
+// The lung runs' linear solver: PETSc with LrpimCaseOptions' Krylov options, or those of the environment variable
+// LRPIM_KRYLOV_OPTIONS (for measuring others without a rebuild); LRPIM_SOLVER=mumps selects MUMPS instead.
+LrpimCaseOptions lung_options() {
+  LrpimCaseOptions options;
+  options.linear_solver = LrpimLinearSolver::petsc_krylov;
+  if (const char* k = std::getenv("LRPIM_KRYLOV_OPTIONS")) options.krylov_options = k;
+  if (const char* s = std::getenv("LRPIM_SOLVER"); s && std::string(s) == "mumps")
+    options.linear_solver = LrpimLinearSolver::mumps;
+  options.on_step = [](const LrpimStepReport& s) {
+    std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
+              << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds
+              << " s" << std::endl;
+  };
+  return options;
+}
 
 struct Score {
   double rmse = 0.0, peak = 0.0;  // [m]
@@ -46,14 +63,7 @@ void print_run(const std::string& label, const LrpimCaseRun& run, const Score& s
 TEST(LrpimLung, LungSmallAgainstTheFemReference) {
   const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
   const core::Geometry g = core::build_geometry(c);
-  LrpimCaseOptions options;
-  options.linear_solver = LrpimLinearSolver::petsc_krylov;
-  options.on_step = [](const LrpimStepReport& s) {
-    std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
-              << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds
-              << " s" << std::endl;
-  };
-  const LrpimCaseRun run = run_lrpim_case(c, g, options);
+  const LrpimCaseRun run = run_lrpim_case(c, g, lung_options());
   std::cout << "LRPIM set-up " << run.setup_seconds << " s" << std::endl;
   const reference_fem::FemRunResult fem = reference_fem::run_case(c, g);
   const Score s = score(run.sample_displacements, fem.sample_displacements);
@@ -65,13 +75,23 @@ TEST(LrpimLung, LungSmallAgainstTheFemReference) {
   EXPECT_NEAR(run.details["load"]["total_force_n"][0].get<double>(), c.load.force.x(), 1e-12);
 }
 
+// The CI-sized lung (16 mm cloud): a quick run for trying solver options (LRPIM_KRYLOV_OPTIONS); disabled.
+TEST(LrpimLung, DISABLED_LungSmallCiRuns) {
+  const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
+  core::GeometryOptions geometry;
+  geometry.build_fem_mesh = false;
+  const core::Geometry g = core::build_geometry(c, geometry);
+  const LrpimCaseRun run = run_lrpim_case(c, g, lung_options());
+  std::cout << run.details.dump() << "\n" << run.sample_displacements * 1e3 << "\n";
+}
+
 // The angular rule's effect on lung_small (docs/LRPIM.md §5): run with --gtest_also_run_disabled_tests.
 TEST(LrpimLung, DISABLED_AngularRuleStudyOnLungSmall) {
   const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_small.json");
   const core::Geometry g = core::build_geometry(c);
   const reference_fem::FemRunResult fem = reference_fem::run_case(c, g);
   for (const auto& [polar, azimuthal, radial] : std::vector<std::tuple<int, int, int>>{{4, 8, 3}, {6, 12, 3}, {8, 16, 4}}) {
-    LrpimCaseOptions options;
+    LrpimCaseOptions options = lung_options();
     options.rule.polar = polar;
     options.rule.azimuthal = azimuthal;
     options.rule.radial = radial;
@@ -89,7 +109,7 @@ TEST(LrpimLung, RealStlLobeRunsAndConverges) {
   core::GeometryOptions geometry;
   geometry.build_fem_mesh = false;
   const core::Geometry g = core::build_geometry(c, geometry);
-  const LrpimCaseRun run = run_lrpim_case(c, g);
+  const LrpimCaseRun run = run_lrpim_case(c, g, lung_options());
   ASSERT_EQ(static_cast<int>(run.steps.size()), c.time.steps);
   ASSERT_TRUE(run.sample_displacements.allFinite());
   double peak = 0.0;

@@ -335,6 +335,19 @@ void LrpimModel::assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorX
     }
   }
   if (error) std::rethrow_exception(error);
+  // A non-finite value would only surface as a failed solve; name the node instead.
+  for (int i = 0; i < n; ++i) {
+    bool finite = r->segment<3>(3 * i).allFinite();
+    if (values) finite = finite && Eigen::Map<const Eigen::VectorXd>(values + 9 * row_begin_[i], 9 * (row_begin_[i + 1] - row_begin_[i])).allFinite();
+    if (!finite) {
+      std::ostringstream m;
+      m << "LrpimModel '" << problem_.name << "': non-finite residual or tangent in the rows of node " << i << " at ("
+        << 1e3 * problem_.nodes.row(i) << ") mm (" << volume_begin_[i + 1] - volume_begin_[i] << " volume, "
+        << support_begin_[i + 1] - support_begin_[i] << " support, " << traction_begin_[i + 1] - traction_begin_[i]
+        << " traction points)";
+      throw std::runtime_error(m.str());
+    }
+  }
 }
 
 void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStepRecord&)>& on_step) {
