@@ -17,13 +17,15 @@ namespace meshless::lrpim {
 namespace {
 
 // The lung runs' linear solver: PETSc with LrpimCaseOptions' Krylov options, or those of the environment variable
-// LRPIM_KRYLOV_OPTIONS (for measuring others without a rebuild); LRPIM_SOLVER=mumps selects MUMPS instead.
+// LRPIM_KRYLOV_OPTIONS (for measuring others without a rebuild); LRPIM_SOLVER=mumps selects MUMPS instead, and
+// LRPIM_NO_DIVERGENCE_CORRECTION (set) turns the correction off (docs/LRPIM.md §5).
 LrpimCaseOptions lung_options() {
   LrpimCaseOptions options;
   options.linear_solver = LrpimLinearSolver::petsc_krylov;
   if (const char* k = std::getenv("LRPIM_KRYLOV_OPTIONS")) options.krylov_options = k;
   if (const char* s = std::getenv("LRPIM_SOLVER"); s && std::string(s) == "mumps")
     options.linear_solver = LrpimLinearSolver::mumps;
+  if (std::getenv("LRPIM_NO_DIVERGENCE_CORRECTION")) options.divergence_correction = false;
   options.on_step = [](const LrpimStepReport& s) {
     std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
               << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds

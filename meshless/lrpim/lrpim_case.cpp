@@ -72,6 +72,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.refactor_contraction = options.refactor_contraction;
   p.linear_solver = options.linear_solver;
   p.krylov_options = options.krylov_options;
+  p.divergence_correction = options.divergence_correction;
   return p;
 }
 

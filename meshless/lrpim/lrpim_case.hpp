@@ -42,6 +42,7 @@ struct LrpimCaseOptions {
   double newton_tolerance = 1e-8;     ///< as the EFG's EfgOptions::newton_tolerance
   double refactor_contraction = 0.2;  ///< modified Newton, as the EFG's (LrpimProblem::refactor_contraction)
   int max_newton_iterations = 25;
+  bool divergence_correction = true;  ///< LrpimProblem::divergence_correction
   /// Called after each converged step (optional).
   std::function<void(const LrpimStepReport&)> on_step;
 };
