@@ -516,8 +516,20 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
 
   // Read from the tables before the update changes them: the terms of the rows it drops leave the VCI sums, and the
   // old node lists of the points it evaluates again tell which of them can couple a new node pair.
-  add_divergence_terms(volume_, false, dropped_rows(volume_, volume_reuse), -1.0, &defect_, &support_volume_);
-  add_divergence_terms(surface_, true, dropped_rows(surface_, surface_reuse), -1.0, &defect_, &support_volume_);
+  const int n = problem_.mesh.num_vertices();
+  const std::vector<int> volume_dropped = dropped_rows(volume_, volume_reuse);
+  const std::vector<int> surface_dropped = dropped_rows(surface_, surface_reuse);
+  add_divergence_terms(volume_, false, volume_dropped, -1.0, &defect_, &support_volume_);
+  add_divergence_terms(surface_, true, surface_dropped, -1.0, &defect_, &support_volume_);
+  // Per node, the incidence entries of the dropped rows: the merged incidence's counts without a pass over all.
+  auto entries_per_node = [n](const ShapeTable& table, const std::vector<int>& rows) {
+    std::vector<int> count(n, 0);
+    for (int q : rows)
+      for (int s = table.begin(q); s < table.end(q); ++s) ++count[table.nodes[s]];
+    return count;
+  };
+  const std::vector<int> volume_dropped_entries = entries_per_node(volume_, volume_dropped);
+  const std::vector<int> surface_dropped_entries = entries_per_node(surface_, surface_dropped);
   const OldNodeLists volume_old_nodes(volume_, volume_reuse, volume_same);
   const OldNodeLists surface_old_nodes(surface_, surface_reuse, surface_same);
 
@@ -532,20 +544,20 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   // A reused row keeps its nodes, whose pairs the pattern holds; only the recomputed rows can bring a new pair.
   const auto t2 = std::chrono::steady_clock::now();
   // The incidence follows the tables: merged from the one before when the kept rows stayed in their slots.
-  const int n = problem_.mesh.num_vertices();
   // The merged incidence is written into the arrays of the one before last (kept for this), so that the update does
   // not allocate (and fault in) 70 MB afresh on the lung.
-  auto follow = [n](const ShapeTable& table, bool packed, const std::vector<int>& reuse, NodeIncidence* incidence,
-                    NodeIncidence* spare) {
+  auto follow = [n](const ShapeTable& table, bool packed, const std::vector<int>& reuse,
+                    const std::vector<int>& dropped_entries, NodeIncidence* incidence, NodeIncidence* spare) {
     if (packed) {
       *incidence = NodeIncidence(table, n);
       return;
     }
-    merge_incidence(*incidence, table, reuse, spare);
+    merge_incidence(*incidence, table, reuse, spare, &dropped_entries);
     std::swap(*incidence, *spare);
   };
-  follow(volume_, volume_packed, volume_reuse, &volume_incidence_, &spare_volume_incidence_);
-  follow(surface_, surface_packed, surface_reuse, &surface_incidence_, &spare_surface_incidence_);
+  follow(volume_, volume_packed, volume_reuse, volume_dropped_entries, &volume_incidence_, &spare_volume_incidence_);
+  follow(surface_, surface_packed, surface_reuse, surface_dropped_entries, &surface_incidence_,
+         &spare_surface_incidence_);
   auto evaluated_rows = [](const std::vector<int>& reuse) {
     std::vector<int> rows;
     for (int q = 0; q < static_cast<int>(reuse.size()); ++q)

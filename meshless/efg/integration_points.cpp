@@ -299,7 +299,7 @@ NodeIncidence::NodeIncidence(const NodeIncidence& before, const ShapeTable& tabl
 }
 
 void merge_incidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse,
-                     NodeIncidence* merged) {
+                     NodeIncidence* merged, const std::vector<int>* dropped_entries) {
   if (merged == &before) throw std::invalid_argument("merge_incidence: the result must not be the incidence before");
   NodeIncidence& out = *merged;
   std::vector<int>& offsets = out.offsets;
@@ -342,34 +342,47 @@ void merge_incidence(const NodeIncidence& before, const ShapeTable& table, const
 
   // Node by node: the kept entries (still in increasing point order) merged with the added ones.
   offsets.assign(num_nodes + 1, 0);
+  if (dropped_entries) {
+    for (int i = 0; i < num_nodes; ++i)
+      offsets[i + 1] = before.offsets[i + 1] - before.offsets[i] - (*dropped_entries)[i] + added_offsets[i + 1] -
+                       added_offsets[i];
+  } else {
 #pragma omp parallel for schedule(static, 256)
-  for (int i = 0; i < num_nodes; ++i) {
-    int kept = 0;
-    for (int e = before.offsets[i]; e < before.offsets[i + 1]; ++e) kept += new_of_old[before.points[e]] >= 0;
-    offsets[i + 1] = kept + added_offsets[i + 1] - added_offsets[i];
+    for (int i = 0; i < num_nodes; ++i) {
+      int kept = 0;
+      for (int e = before.offsets[i]; e < before.offsets[i + 1]; ++e) kept += new_of_old[before.points[e]] >= 0;
+      offsets[i + 1] = kept + added_offsets[i + 1] - added_offsets[i];
+    }
   }
   for (int i = 0; i < num_nodes; ++i) offsets[i + 1] += offsets[i];
   slots.resize(offsets.back());
   points.resize(offsets.back());
-#pragma omp parallel for schedule(static, 256)
+  int miscounted = 0;  // nodes whose given dropped count disagrees with the entries found (then transposed)
+#pragma omp parallel for schedule(static, 256) reduction(+ : miscounted)
   for (int i = 0; i < num_nodes; ++i) {
     int at = offsets[i], a = added_offsets[i];
     for (int e = before.offsets[i]; e < before.offsets[i + 1]; ++e) {
       const int q = new_of_old[before.points[e]];
       if (q < 0) continue;
-      for (; a < added_offsets[i + 1] && added_points[a] < q; ++a, ++at) {
+      for (; a < added_offsets[i + 1] && added_points[a] < q && at < offsets[i + 1]; ++a, ++at) {
         slots[at] = added_slots[a];
         points[at] = added_points[a];
+      }
+      if (at >= offsets[i + 1]) {  // more kept entries than counted: stop before writing past the node's range
+        ++miscounted;
+        break;
       }
       slots[at] = before.slots[e];
       points[at] = q;
       ++at;
     }
-    for (; a < added_offsets[i + 1]; ++a, ++at) {
+    for (; a < added_offsets[i + 1] && at < offsets[i + 1]; ++a, ++at) {
       slots[at] = added_slots[a];
       points[at] = added_points[a];
     }
+    if (at != offsets[i + 1] || a != added_offsets[i + 1]) ++miscounted;
   }
+  if (miscounted > 0) out = NodeIncidence(table, num_nodes);
 }
 
 }  // namespace meshless

@@ -114,7 +114,10 @@ struct NodeIncidence {
 
 /// The same as NodeIncidence(before, table, reuse), written into `merged` (not `before`), whose arrays are reused
 /// when they are large enough: a local update that keeps the incidence before last for this allocates nothing.
+/// `dropped_entries` (optional, #nodes): per node, the entries of `before` whose rows no point reuses (the caller
+/// counted them from the dropped rows before the update), which spares a pass over every entry; a count that
+/// disagrees with the entries found makes the result a transpose of the table instead.
 void merge_incidence(const NodeIncidence& before, const ShapeTable& table, const std::vector<int>& reuse,
-                     NodeIncidence* merged);
+                     NodeIncidence* merged, const std::vector<int>* dropped_entries = nullptr);
 
 }  // namespace meshless
