@@ -29,8 +29,9 @@ struct LrpimStepReport {
 };
 
 /// The angular rule of the case runs: 4 polar x 8 azimuthal directions x 3 radial points per piece (up to 192
-/// points per node, against 1,024 for the verification rule), chosen for time and memory on lung_small; its effect
-/// on the answer is measured in docs/LRPIM.md §5.
+/// points per node, against 1,024 for the verification rule), chosen for time and memory on lung_small (the
+/// verification rule would tabulate ~9.5 M points there). Its effect on the lung's answer is not measured yet
+/// (docs/LRPIM.md §5).
 LocalQuadratureRule case_quadrature_rule();
 
 struct LrpimCaseOptions {
