@@ -84,13 +84,13 @@ meshless::EfgModel& model_for(int side, const Variant& variant = {}) {
     model.reset();
     meshless::EfgOptions options;
     options.linear_solver = variant.solver;
-    options.variationally_consistent = variant.variationally_consistent;
     options.preconditioner_drop_tolerance = variant.drop_tolerance;
     options.distributed_krylov_solve = !variant.one_process;
     if (!variant.krylov_options.empty()) options.krylov_options = variant.krylov_options;
     meshless::EfgProblem problem = meshless::sheared_box_problem(side);
     problem.support.d_max = variant.d_max;
     problem.penalty_factor = variant.penalty_factor;
+    problem.variationally_consistent = variant.variationally_consistent;
     if (variant.node_order_for_locality) core::order_for_locality(&problem.mesh);
     model = std::make_unique<meshless::EfgModel>(std::move(problem), options);
     model->setup_system();

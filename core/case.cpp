@@ -148,6 +148,19 @@ MeshlessSpec read_meshless(const std::optional<JsonReader>& r, double fem_mesh_s
   m.front_transition = r->in_range("front_transition", 0.0, 200.0, true, true,
                                    m.node_spacing * MeshlessSpec::kFrontTransitionPerSpacing / kMm) *
                        kMm;
+  m.variationally_consistent = r->boolean("variationally_consistent", defaults.variationally_consistent);
+  if (r->choice("preset", {"default", "paper"}, "default") == "paper") {
+    const MeshlessSpec paper = m.in_paper_configuration();
+    // The preset names the paper's model; a key that says otherwise would give a model that is neither.
+    if (r->has("variationally_consistent") && m.variationally_consistent != paper.variationally_consistent)
+      r->fail("variationally_consistent",
+              "expected false or no key: /meshless/preset \"paper\" is the paper's plain Gauss quadrature of eq. 22, "
+              "without variationally consistent integration");
+    if (r->has("front_transition") && m.front_transition != paper.front_transition)
+      r->fail("front_transition", "expected 0 or no key: /meshless/preset \"paper\" is the paper's enrichment "
+                                  "(eqs. 29-32) without a front transition");
+    m = paper;
+  }
   r->finish();
   return m;
 }

@@ -106,6 +106,12 @@ struct CutSpec {
 };
 
 struct MeshlessSpec {
+  /// The named configurations of /meshless/preset. "default" is this project's EFG; "paper" is the paper's own
+  /// (§2 and §4 as written): plain Gauss quadrature of eq. 22 (no variationally consistent integration) and the
+  /// enrichment of eqs. 29-32 without a front transition. A preset sets the defaults of the keys it names;
+  /// the case reader refuses an explicit key that contradicts it (docs/CONFIG.md, docs/MESHLESS.md §1).
+  enum class Preset { standard, paper };
+  Preset preset = Preset::standard;
   double node_spacing = 0.012;  ///< [m] target spacing of the node cloud
   /// d_max: rho_i = d_max * distance to the k-th nearest node. 1.5 would couple each node to about 0.4x as many
   /// and cut the iterations of the ML-preconditioned Krylov solve about tenfold, but it fails the cantilever's
@@ -123,6 +129,23 @@ struct MeshlessSpec {
   /// sets l = spacing / 5). docs/MESHLESS.md §5.2 measures each choice.
   double front_transition = 0.012 * kFrontTransitionPerSpacing;
   static constexpr double kFrontTransitionPerSpacing = 0.0;
+  /// Linear variationally consistent integration (Chen, Hillman & Rueter 2013; docs/MESHLESS.md §1): a constant per
+  /// node added to the test-function gradients so that the background quadrature passes the linear patch test.
+  /// false is the paper's plain eq. 22, which fails that test (the "paper" preset).
+  bool variationally_consistent = true;
+
+  /// The preset's name as written in a case ("default" or "paper").
+  std::string preset_name() const { return preset == Preset::paper ? "paper" : "default"; }
+  /// This spec with the paper's configuration in place of this project's choices (the "paper" preset): no
+  /// variationally consistent integration and no front transition; every other key (the cloud, the support, the
+  /// quadrature order, the cut treatment) is kept. The one place that says what the preset changes.
+  MeshlessSpec in_paper_configuration() const {
+    MeshlessSpec m = *this;
+    m.preset = Preset::paper;
+    m.variationally_consistent = false;
+    m.front_transition = 0.0;
+    return m;
+  }
 };
 
 struct FemSpec {

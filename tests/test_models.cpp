@@ -12,6 +12,9 @@
 #include "core/case_error.hpp"
 #include "experiments/comparator/compare.hpp"
 #include "experiments/models/model_registry.hpp"
+#include "experiments/models/efg/meshless_runs.hpp"
+#include "core/kelvin_law.hpp"
+#include "core/ruled_surface.hpp"
 
 namespace {
 
@@ -35,13 +38,14 @@ std::string refusal(const json& document) {
 
 TEST(ModelRegistry, KnowsEveryModelByNameWithItsRole) {
   const std::vector<std::string> names = experiments::registered_model_names();
-  for (const char* name : {"fem", "enrichment", "visibility", "lrpim", "zero"})
+  for (const char* name : {"fem", "enrichment", "visibility", "paper", "lrpim", "zero"})
     EXPECT_NE(std::find(names.begin(), names.end(), name), names.end()) << name;
   EXPECT_EQ(experiments::make_model("no such model"), nullptr);
   EXPECT_EQ(experiments::role_kind(experiments::make_model("fem")->role()), "reference");
   EXPECT_EQ(experiments::role_kind(experiments::make_model("enrichment")->role()), "proposed");
   EXPECT_EQ(experiments::role_kind(experiments::make_model("visibility")->role()), "baseline");
   EXPECT_EQ(experiments::role_kind(experiments::make_model("zero")->role()), "floor");
+  EXPECT_EQ(experiments::role_kind(experiments::make_model("paper")->role()), "as published");
   for (const auto& name : names) {
     const auto m = experiments::make_model(name);
     EXPECT_EQ(m->name(), name);
@@ -72,6 +76,86 @@ TEST(ModelRegistry, TheDefaultListIsTheReferenceAndThePapersTwoVariants) {
   EXPECT_NE(lrpim->cannot_solve(cut_case).find("no treatment of a cut"), std::string::npos);
   EXPECT_TRUE(lrpim->needs_node_cloud());
   EXPECT_FALSE(lrpim->needs_fem_mesh());
+}
+
+// The "paper" preset is the paper's EFG as published: no VCI and no front transition, every other key kept. The
+// "paper" model solves any case that way, and is the proposed model itself when the case already uses the preset.
+TEST(PaperPreset, SetsThePapersConfigurationAndRefusesKeysThatContradictIt) {
+  json doc = shipped_case();
+  doc["meshless"]["front_transition"] = 2.0;
+  const core::Case ours = core::parse_case(doc, "lung_small.json");
+  EXPECT_EQ(ours.meshless.preset, core::MeshlessSpec::Preset::standard);
+  EXPECT_TRUE(ours.meshless.variationally_consistent);
+  EXPECT_DOUBLE_EQ(ours.meshless.front_transition, 2e-3);
+
+  doc["meshless"].erase("front_transition");
+  doc["meshless"]["preset"] = "paper";
+  const core::Case paper = core::parse_case(doc, "lung_small.json");
+  EXPECT_EQ(paper.meshless.preset, core::MeshlessSpec::Preset::paper);
+  EXPECT_EQ(paper.meshless.preset_name(), "paper");
+  EXPECT_FALSE(paper.meshless.variationally_consistent);
+  EXPECT_EQ(paper.meshless.front_transition, 0.0);
+  // Everything else is the case's own.
+  EXPECT_DOUBLE_EQ(paper.meshless.node_spacing, ours.meshless.node_spacing);
+  EXPECT_EQ(paper.meshless.quadrature_order, ours.meshless.quadrature_order);
+  EXPECT_DOUBLE_EQ(paper.meshless.support_factor, ours.meshless.support_factor);
+  EXPECT_EQ(paper.meshless.enrichment, ours.meshless.enrichment);
+  // The translation carries the quadrature's consistency into the discrete problem.
+  const auto ours_as_paper = ours.meshless.in_paper_configuration();
+  EXPECT_FALSE(ours_as_paper.variationally_consistent);
+  EXPECT_EQ(ours_as_paper.front_transition, 0.0);
+
+  doc["meshless"]["front_transition"] = 2.0;
+  EXPECT_EQ(refusal(doc), "/meshless/front_transition: case.json: /meshless/front_transition: expected 0 or no "
+                          "key: /meshless/preset \"paper\" is the paper's enrichment (eqs. 29-32) without a front "
+                          "transition");
+  doc["meshless"]["front_transition"] = 0.0;  // agrees with the preset
+  EXPECT_EQ(refusal(doc), "accepted");
+  doc["meshless"]["variationally_consistent"] = true;
+  EXPECT_EQ(refusal(doc), "/meshless/variationally_consistent: case.json: /meshless/variationally_consistent: "
+                          "expected false or no key: /meshless/preset \"paper\" is the paper's plain Gauss quadrature "
+                          "of eq. 22, without variationally consistent integration");
+  doc["meshless"]["variationally_consistent"] = false;
+  EXPECT_EQ(refusal(doc), "accepted");
+  doc["meshless"]["preset"] = "published";
+  EXPECT_NE(refusal(doc).find("/meshless/preset"), std::string::npos);
+
+  const auto model = experiments::make_model("paper");
+  EXPECT_EQ(model->same_as(ours), "");
+  EXPECT_EQ(model->same_as(paper), "enrichment");
+  EXPECT_TRUE(model->needs_node_cloud());
+}
+
+// Beside a cut's front the EFG's strain can leave the law's range because of the enrichment's sharp front, not the
+// load: the error then says so and names the key to change (and, under the paper's preset, that the preset fixes it).
+TEST(EfgErrors, AnInadmissibleStrainBesideTheCutsFrontNamesTheFrontTransition) {
+  const core::RuledSurface cut({Eigen::Vector3d(0.0, 0.0, 0.0), Eigen::Vector3d(0.04, 0.0, 0.0)},
+                               Eigen::Vector3d(0.0, 0.0, -1.0), 0.02);
+  core::KelvinParameters parameters;
+  parameters.K1 = 6000.0;
+  parameters.K2 = 12000.0;
+  parameters.eta = 18000.0;
+  parameters.nu = 0.4;
+  parameters.k = 1.0;
+  core::Vector6 strain = core::Vector6::Zero();
+  strain(0) = -0.6;  // beyond -1/(2k)
+  const core::KelvinLaw law(parameters);
+  const core::InadmissibleStrain beside_front("meshless (EFG) model 'test'", 1.0, Eigen::Vector3d(0.02, 0.001, -0.021),
+                                              strain, law);
+  const core::InadmissibleStrain far_away("meshless (EFG) model 'test'", 1.0, Eigen::Vector3d(0.02, 0.03, -0.01),
+                                          strain, law);
+  core::MeshlessSpec spec;
+  spec.node_spacing = 0.016;
+  EXPECT_EQ(experiments::front_transition_hint(beside_front, spec, cut, 0.0),
+            "That point is 1.41 mm from the cut's front, within one node spacing: the enrichment closes the cut there "
+            "over ℓ = 0.00 mm (/meshless/front_transition), and a sharp front concentrates the strain beside it. To "
+            "stay inside the range: set /meshless/front_transition to about node_spacing / 5 = 3.2 mm, which closes "
+            "the cut over that distance (docs/MESHLESS.md §5.2)");
+  EXPECT_EQ(experiments::front_transition_hint(far_away, spec, cut, 0.0), "");  // 30 mm from the front
+  EXPECT_EQ(experiments::front_transition_hint(beside_front, spec, std::nullopt, 0.0), "");
+  const std::string paper = experiments::front_transition_hint(beside_front, spec.in_paper_configuration(), cut, 0.0);
+  EXPECT_NE(paper.find("fixed at 0 by /meshless/preset \"paper\""), std::string::npos) << paper;
+  EXPECT_NE(paper.find("leave the paper's preset (/meshless/preset \"default\")"), std::string::npos) << paper;
 }
 
 TEST(ModelRegistry, ACaseNamesItsModelsAndBadListsAreRefusedWithThePath) {

@@ -22,6 +22,7 @@ const std::vector<Factory>& factories() {
       [] { return std::make_unique<FemReferenceModel>(); },
       [] { return std::make_unique<EfgVariantModel>(EfgVariantModel::Variant::enrichment); },
       [] { return std::make_unique<EfgVariantModel>(EfgVariantModel::Variant::visibility); },
+      [] { return std::make_unique<EfgVariantModel>(EfgVariantModel::Variant::paper); },
       [] { return std::make_unique<LrpimCaseModel>(); },
       [] { return std::make_unique<ZeroModel>(); },
   };

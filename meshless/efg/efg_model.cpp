@@ -199,7 +199,7 @@ void EfgModel::build_couplings(bool new_pattern) {
   }
   divergence_defect_ = defect_.colwise().norm().maxCoeff();
   vci_correction_ = Eigen::Matrix3Xd::Zero(3, n);
-  if (options_.variationally_consistent)
+  if (problem_.variationally_consistent)
     for (int i = 0; i < n; ++i) vci_correction_.col(i) = defect_.col(i) / support_volume_[i];
   // Per-point arrays with room for the points a cut's local update adds (a cell split differently), so that an
   // update neither reallocates nor copies them.

@@ -32,6 +32,7 @@ EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g) {
   p.cut = g.cut;
   p.cut_treatment = cut_treatment_from_name(c.meshless.enrichment);
   p.front_transition = c.meshless.front_transition;
+  p.variationally_consistent = c.meshless.variationally_consistent;
   return p;
 }
 

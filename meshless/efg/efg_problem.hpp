@@ -48,10 +48,6 @@ struct EfgOptions {
   /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many
   /// iterations to reach iterative_tolerance. Direct solvers only; 0 always factorises. docs/MESHLESS.md §2.
   int earlier_factors_max_iterations = 30;
-  /// Variationally consistent integration (Chen, Hillman & Rueter 2013, linear VCI): add a constant per node
-  /// to the test-function gradients so the discrete divergence theorem int grad phi_i = oint phi_i n holds
-  /// for the background quadrature. Makes the linear patch test pass to round-off; off = plain eq. 22.
-  bool variationally_consistent = true;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   /// automatic: factorise when the estimated peak memory of the LU (meshless/solvers/direct_solver_estimate.hpp, AMD on
   /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
@@ -120,6 +116,11 @@ struct EfgProblem {
   CutTreatment cut_treatment = CutTreatment::enrichment;
   /// l of the enrichment's front transition [m] (meshless/cut/cut_weights.hpp); 0 = the paper's phi as it stands.
   double front_transition = 0.0;
+  /// Variationally consistent integration (Chen, Hillman & Rueter 2013, linear VCI): add a constant per node
+  /// to the test-function gradients so the discrete divergence theorem int grad phi_i = oint phi_i n holds
+  /// for the background quadrature. Makes the linear patch test pass to round-off; off = the paper's plain eq. 22.
+  /// Part of the discrete problem (it changes the answer), so it lives here and not among the solver's options.
+  bool variationally_consistent = true;
   /// Traction on the lips at full load (scaled by load_scale(t)); empty = traction-free, as an incision is.
   /// Verification problems load them with sigma n.
   LipTraction lip_traction;
@@ -129,8 +130,9 @@ struct EfgProblem {
 
 /// The load case of a config: meshless_mesh of the geometry, the fixed faces penalised (a clamp: alpha() and zero
 /// u-bar; an elastic support: alpha = k_s(x) of the case), uniform traction
-/// force(t) / A_patch on the load faces (core::load_program), and the geometry's cut (if any) with the case's
-/// treatment (/meshless/enrichment) and front transition (/meshless/front_transition).
+/// force(t) / A_patch on the load faces (core::load_program), the geometry's cut (if any) with the case's
+/// treatment (/meshless/enrichment) and front transition (/meshless/front_transition), and the quadrature's
+/// consistency correction (/meshless/variationally_consistent; both set by /meshless/preset).
 EfgProblem problem_from_case(const core::Case& c, const core::Geometry& g);
 
 }  // namespace meshless

@@ -105,9 +105,8 @@ PatchTestReport run_patch_test(int quadrature_order, bool variationally_consiste
     }
     return sigma * n;
   };
-  EfgOptions options;
-  options.variationally_consistent = variationally_consistent;
-  EfgModel model(std::move(p), options);
+  p.variationally_consistent = variationally_consistent;
+  EfgModel model(std::move(p));
   model.run();
 
   PatchTestReport r;
@@ -151,9 +150,8 @@ CantileverReport run_cantilever(int nd, int quadrature_order, bool variationally
   auto exact_strain = [exact](const Eigen::Vector3d& x) { return exact.strain(x); };
   p.prescribed_displacement = exact_u;
   p.traction = [exact](const Eigen::Vector3d& x) { return exact.end_traction(x); };
-  EfgOptions options;
-  options.variationally_consistent = variationally_consistent;
-  EfgModel model(std::move(p), options);
+  p.variationally_consistent = variationally_consistent;
+  EfgModel model(std::move(p));
   model.run();
 
   CantileverReport r;

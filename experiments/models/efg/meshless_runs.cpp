@@ -8,6 +8,7 @@
 
 #include "core/output_directory.hpp"
 #include "core/case.hpp"
+#include "core/inadmissible_strain.hpp"
 #include "experiments/studies/crack_opening.hpp"
 #include "experiments/models/model_result.hpp"
 #include "experiments/io/progress.hpp"
@@ -86,6 +87,21 @@ std::string linear_work(const meshless::StepRecord& rec, const meshless::EfgStat
 
 }  // namespace
 
+std::string front_transition_hint(const core::InadmissibleStrain& e, const core::MeshlessSpec& spec,
+                                  const std::optional<core::RuledSurface>& cut, double front_transition) {
+  if (!cut) return {};
+  const double to_front = cut->front_distance(e.point());
+  if (to_front > spec.node_spacing) return {};
+  const bool paper = spec.preset == core::MeshlessSpec::Preset::paper;
+  return fmt::format(
+      "That point is {:.2f} mm from the cut's front, within one node spacing: the enrichment closes the cut there over "
+      "ℓ = {:.2f} mm (/meshless/front_transition{}), and a sharp front concentrates the strain beside it. To stay "
+      "inside the range: {}set /meshless/front_transition to about node_spacing / 5 = {:.1f} mm, which closes the cut "
+      "over that distance (docs/MESHLESS.md §5.2)",
+      to_front * 1e3, front_transition * 1e3, paper ? ", fixed at 0 by /meshless/preset \"paper\"" : "",
+      paper ? "leave the paper's preset (/meshless/preset \"default\") and " : "", spec.node_spacing / 5.0 * 1e3);
+}
+
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
                            const std::function<void(const std::string&)>& on_step,
                            const meshless::EfgOptions& options, bool progressive_cut) {
@@ -141,7 +157,14 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                             model.problem().cut->trace_length() * 1e3, full_cut->trace_length() * 1e3,
                             u.volume_points_recomputed, u.volume_points, u.pairs_added, u.seconds));
     }
-    const meshless::StepRecord rec = model.solve_step(step);
+    meshless::StepRecord rec;
+    try {
+      rec = model.solve_step(step);
+    } catch (const core::InadmissibleStrain& e) {
+      const std::string hint = front_transition_hint(e, c.meshless, model.problem().cut, model.problem().front_transition);
+      if (hint.empty()) throw;
+      throw std::runtime_error(std::string(e.what()) + ". " + hint);
+    }
     if (!vtu_prefix.empty() && c.output.vtu && (step % every == 0 || step == n_steps)) {
       // output_results: interpolated displacement u(X_i) = sum_j phi_j(X_i) U_j on the meshless cells (eq. 7)
       write_tet_vtu(fmt::format("{}_{:03d}.vtu", vtu_prefix, step), model.nodes(), g.meshless_mesh.tets,
@@ -177,7 +200,8 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.details["penalised_area_mm2"] = st.penalised_area * 1e6;
   r.details["load_area_mm2"] = st.loaded_area * 1e6;
   r.details["quadrature_order"] = c.meshless.quadrature_order;
-  r.details["variationally_consistent_integration"] = options.variationally_consistent;
+  r.details["variationally_consistent_integration"] = model.problem().variationally_consistent;
+  r.details["preset"] = c.meshless.preset_name();
   r.details["divergence_defect_before_vci"] = model.divergence_defect();
   r.details["linear_solver"] = st.linear_solver;
   r.details["umfpack_peak_memory_estimate_bytes"] = st.direct_peak_memory_estimate;

@@ -2,10 +2,13 @@
 // The meshless (EFG) model behind `tissue solve meshless` (solve_commands.cpp) and `tissue verify meshless`
 // (verify_commands.cpp).
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include "core/inadmissible_strain.hpp"
+#include "core/ruled_surface.hpp"
 #include "experiments/models/model_result.hpp"
 #include "meshless/efg/efg_problem.hpp"
 
@@ -20,6 +23,13 @@ namespace experiments {
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
                            const std::function<void(const std::string&)>& on_step = {},
                            const meshless::EfgOptions& options = {}, bool progressive_cut = false);
+
+/// What to change when the EFG's strain left the law's admissible range (e) beside a cut's front: within one node
+/// spacing of the front the cause is the enrichment's sharp front (docs/MESHLESS.md §5.2), not the load, so the
+/// generic advice of `e` (a smaller force, a larger patch) would mislead. Empty elsewhere or without a cut.
+/// solve_meshless appends it to the error.
+std::string front_transition_hint(const core::InadmissibleStrain& e, const core::MeshlessSpec& spec,
+                                  const std::optional<core::RuledSurface>& cut, double front_transition);
 
 /// `tissue verify meshless`: invariants, patch test, cantilever convergence and creep curve into
 /// OUT/meshless.json and OUT/meshless.md.
