@@ -1,10 +1,11 @@
 #!/usr/bin/env python3
 """RMSE and wall time against a swept parameter, from a sweep's summary.csv (`tissue sweep`).
 
-Usage: plot_sweep.py SUMMARY_CSV OUT_PNG --x POINTER [--title TITLE]
+Usage: plot_sweep.py SUMMARY_CSV OUT_PNG --x POINTER [--with POINTER ...] [--title TITLE]
 
 Left: the eq. 34 RMSE of each scored model (the columns MODEL_rmse_mm) against the reference; right: the wall
-time of each model (fem_seconds is the reference's). With more than one swept parameter, one line per combination of the others. Needs Debian's
+time of each model (fem_seconds is the reference's). With more than one swept parameter, one line per combination of the others
+(--with names the pointers zipped with --x, which vary with it and so make no lines of their own). Needs Debian's
 python3-matplotlib (scripts/install_dependencies.sh).
 """
 import argparse
@@ -25,6 +26,8 @@ def main():
     parser.add_argument("summary_csv")
     parser.add_argument("out_png")
     parser.add_argument("--x", required=True, help="the JSON pointer of the parameter on the x axis")
+    parser.add_argument("--with", dest="zipped", action="append", default=[],
+                        help="a pointer zipped with --x (repeatable): it varies with x, so it is not a line of its own")
     parser.add_argument("--title", default="")
     args = parser.parse_args()
     with open(args.summary_csv, newline="") as f:
@@ -34,7 +37,7 @@ def main():
         models = [c[: -len("_rmse_mm")] for c in reader.fieldnames if c.endswith("_rmse_mm")]
     if args.x not in parameters:
         sys.exit(f"{args.summary_csv}: no parameter column {args.x}")
-    others = [p for p in parameters if p != args.x]
+    others = [p for p in parameters if p != args.x and p not in args.zipped]
     try:
         for r in rows:
             r["_x"] = float(r[args.x])
@@ -56,10 +59,11 @@ def main():
             ax_rmse.plot(xs, values(f"{model}_rmse_mm"), STYLES[(k + 1) % len(STYLES)], label=model + suffix)
         for k, model in enumerate(["fem"] + models):
             ax_time.plot(xs, values(f"{model}_seconds"), STYLES[k % len(STYLES)], label=model + suffix)
-    ax_rmse.set_xlabel(args.x)
+    xlabel = args.x + "".join(f" (with {p})" for p in args.zipped)
+    ax_rmse.set_xlabel(xlabel)
     ax_rmse.set_ylabel("RMSE against the reference [mm] (eq. 34)")
     ax_rmse.set_ylim(bottom=0)
-    ax_time.set_xlabel(args.x)
+    ax_time.set_xlabel(xlabel)
     ax_time.set_ylabel("wall time of the model [s]")
     ax_time.set_ylim(bottom=0)
     for ax in (ax_rmse, ax_time):

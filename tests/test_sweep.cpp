@@ -34,12 +34,24 @@ class Sweep : public ::testing::Test {
   }
   void TearDown() override { fs::remove_all(dir_); }
 
-  std::string write_sweep(const json& parameters, const json& set = json()) {
+  std::string write_sweep(const json& parameters, const json& set = json(), const json& compare = json()) {
     json doc = {{"name", "test_sweep"}, {"base_case", "configs/base.json"}, {"parameters", parameters}};
     if (!set.is_null()) doc["set"] = set;
+    if (!compare.is_null()) doc["compare"] = compare;
     const fs::path p = dir_ / "sweep.json";
     std::ofstream(p) << doc.dump(2);
     return p.string();
+  }
+
+  /// A stand-in `tissue verify fem` result: a mesh study of lung_small_ci at 24 and 18 mm with extrapolated samples.
+  void write_study(const fs::path& path, const std::string& case_name = "lung_small_ci") {
+    fs::create_directories(path.parent_path());
+    const json level24 = {{"mesh_size_mm", 24.0}}, level18 = {{"mesh_size_mm", 18.0}};
+    const json study = {{"mesh_convergence",
+                         {{case_name,
+                           {{"levels", {level24, level18}},
+                            {"richardson", {{"extrapolated_sample_displacements_mm", {{1.0, 0.0, 0.0}}}}}}}}}};
+    std::ofstream(path) << study.dump(2);
   }
 
   std::string error_of(const std::string& sweep_file) {
@@ -80,10 +92,16 @@ experiments::RunOutcome fake_compare(const experiments::SweepRun& run, std::atom
     return o;
   }
   o.ok = true;
+  // The reference's own RMSE against the extrapolated samples: 0.05 mm at an 18 mm FEM mesh, none (solved) else.
+  const bool coarse_fem = run.document["geometry"]["mesh_size"].get<double>() == 18.0;
   o.summary = {{"n_samples", 10},
                {"flagged_samples", json::array({1})},
                {"geometry_seconds", 1.0},
-               {"reference", {{"peak_sample_displacement_mm", 3.5}, {"timings", {{"total_seconds", 2.0}}}}},
+               {"reference",
+                {{"peak_sample_displacement_mm", 3.5},
+                 {"timings", {{"total_seconds", 2.0}}},
+                 {"samples", coarse_fem ? "extrapolated" : "solved"},
+                 {"solved_minus_extrapolated_rms_mm", coarse_fem ? json(0.05) : json(nullptr)}}},
                {"models",
                 {{"enrichment", {{"rmse_mm", h / 100}, {"timings", {{"total_seconds", 3.0}}}}},
                  {"visibility", {{"rmse_mm", h / 50}, {"timings", {{"total_seconds", 3.0}}}}}}}};
@@ -148,6 +166,184 @@ TEST_F(Sweep, BadPointersAndValuesAreRejectedNamingTheFileParameterAndValue) {
   EXPECT_NE(m.find("swept twice"), std::string::npos) << m;
   m = error_of(write_sweep(json::array({{{"pointer", "/material/k"}, {"values", {1}}}}), {{"/material/nu", 0.7}}));
   EXPECT_NE(m.find("sweep.json: /set: the base case"), std::string::npos) << m;
+}
+
+TEST_F(Sweep, ZippedPointersTakeTheirValuesTogetherOneColumnEach) {
+  const std::string file = write_sweep(
+      json::array({{{"pointers", {"/geometry/mesh_size", "/meshless/node_spacing"}}, {"values", {{24, 16}, {18, 12}}}},
+                   {{"pointer", "/material/k"}, {"values", {0, 1}}}}));
+  const auto spec = experiments::load_sweep(file);
+  ASSERT_EQ(spec.parameters.size(), 2u);
+  EXPECT_TRUE(spec.parameters[0].zipped);
+  EXPECT_EQ(spec.columns(), (std::vector<std::string>{"/geometry/mesh_size", "/meshless/node_spacing", "/material/k"}));
+  const auto runs = experiments::expand_sweep(spec);
+  ASSERT_EQ(runs.size(), 4u);  // 2 pairs x 2 values, not 2 x 2 x 2
+  // One value per column, the zipped pair together; the last parameter varies fastest.
+  EXPECT_EQ(runs[0].values, (std::vector<json>{24, 16, 0}));
+  EXPECT_EQ(runs[1].values, (std::vector<json>{24, 16, 1}));
+  EXPECT_EQ(runs[2].values, (std::vector<json>{18, 12, 0}));
+  EXPECT_EQ(runs[3].document["geometry"]["mesh_size"], 18);
+  EXPECT_EQ(runs[3].document["meshless"]["node_spacing"], 12);
+  EXPECT_EQ(runs[3].document["material"]["k"], 1);
+  // The runs.csv header has one column per pointer, in order, after run_id and status.
+  const auto header = experiments::runs_csv_header(spec);
+  EXPECT_EQ(std::vector<std::string>(header.begin(), header.begin() + 5),
+            (std::vector<std::string>{"run_id", "status", "/geometry/mesh_size", "/meshless/node_spacing",
+                                      "/material/k"}));
+  std::atomic<int> calls{0};
+  const auto report = experiments::run_sweep(
+      spec, runs, options(),
+      [&](const experiments::SweepRun& run, const std::string&, const std::string&, const std::string&) {
+        return fake_compare(run, &calls);
+      });
+  EXPECT_EQ(report.succeeded, 4);
+  const auto lines = csv_lines();
+  ASSERT_EQ(lines.size(), 5u);
+  EXPECT_NE(lines[3].find(",ok,18,12,0,10,1,3.5,,0.12,"), std::string::npos) << lines[3];
+}
+
+TEST_F(Sweep, BadZippedParametersAreRejectedNamingThePointerOrValue) {
+  const json both = {"/geometry/mesh_size", "/meshless/node_spacing"};
+  std::string m = error_of(write_sweep(
+      json::array({{{"pointer", "/material/k"}, {"pointers", both}, {"values", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers: expected either \"pointer\" (one) or \"pointers\" (several, "
+                   "zipped), not both"),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", json::array()}, {"values", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers: expected a non-empty array of JSON pointers"),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", {"/geometry/mesh_size", 3}}, {"values", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers/1: expected a JSON pointer string, got number"),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", {"/geometry/mesh_size", "meshless/node_spacing"}},
+                                         {"values", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers/1: expected an RFC 6901 JSON pointer"), std::string::npos)
+      << m;
+  // A value that is not an array of one value per pointer.
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"values", {{24, 16}, {18, 12, 10}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/values/1: expected an array of 2 values, one for each of "
+                   "/geometry/mesh_size, /meshless/node_spacing (in that order), got an array of 3"),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"values", {18}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/values/0: expected an array of 2 values, one for each of "
+                   "/geometry/mesh_size, /meshless/node_spacing (in that order), got number"),
+            std::string::npos)
+      << m;
+  // A bad value is named down to its pointer's place in the pair.
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"values", {{24, 16}, {18, -5}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/values/1/1: /meshless/node_spacing = -5 makes an invalid case: "),
+            std::string::npos)
+      << m;
+  EXPECT_NE(m.find("/meshless/node_spacing: expected a number in [0.5, 200]"), std::string::npos) << m;
+  // A pointer in a zipped parameter and in another parameter (or twice in one), or also in /set.
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"values", {{24, 16}}}},
+                                        {{"pointer", "/meshless/node_spacing"}, {"values", {12}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/1/pointer: /meshless/node_spacing is swept twice"), std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", {"/material/k", "/material/k"}}, {"values", {{1, 2}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers/1: /material/k is swept twice"), std::string::npos) << m;
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"values", {{24, 16}}}}}), {{"/geometry/mesh_size", 20}}));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/pointers/0: /geometry/mesh_size is also in /set"), std::string::npos)
+      << m;
+  m = error_of(write_sweep(json::array({{{"pointers", both}, {"value", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0/value: unknown key; allowed keys here are: pointer (one), pointers"),
+            std::string::npos)
+      << m;
+}
+
+TEST_F(Sweep, CompareOptionsArePassedToEveryRunAndCheckedBeforeAnyRun) {
+  write_study(dir_ / "verify" / "fem.json");
+  const json zipped = json::array(
+      {{{"pointers", {"/geometry/mesh_size", "/meshless/node_spacing"}}, {"values", {{24, 16}, {18, 12}}}}});
+  // The study's path is relative to the sweep file's folder, and made absolute for the runs.
+  auto spec = experiments::load_sweep(
+      write_sweep(zipped, json(), {{"reference", "extrapolated"}, {"reference_error", "verify/fem.json"}}));
+  const std::string study = fs::absolute(dir_ / "verify" / "fem.json").lexically_normal().string();
+  EXPECT_EQ(spec.compare.reference_error, study);
+  EXPECT_EQ(spec.compare.arguments(),
+            (std::vector<std::string>{"--reference", "extrapolated", "--reference-error", study}));
+  const auto runs = experiments::expand_sweep(spec);
+  ASSERT_EQ(runs.size(), 2u);
+  // The compare options change the results, so the same case without them is another run.
+  const auto plain = experiments::expand_sweep(experiments::load_sweep(write_sweep(zipped)));
+  EXPECT_NE(plain[0].id, runs[0].id);
+  EXPECT_TRUE(experiments::SweepCompareOptions{}.arguments().empty());
+
+  // Refusals, each before anything runs, naming the sweep file and the JSON path in it.
+  std::string m = error_of(write_sweep(zipped, json(), {{"reference", "extrapolated"}, {"reference_error", "nope.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference_error: expected an existing `tissue verify fem` result (fem.json), "
+                   "but \"" + (dir_ / "nope.json").string() + "\" cannot be opened"),
+            std::string::npos)
+      << m;
+  std::ofstream(dir_ / "not_a_study.json") << "{\"cantilever\": {}}";
+  m = error_of(write_sweep(zipped, json(), {{"reference_error", "not_a_study.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference_error: expected a `tissue verify fem` result with a mesh_convergence "
+                   "study"),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(zipped, json(), {{"reference", "extrapolated"}}));
+  EXPECT_NE(m.find("sweep.json: /compare: \"reference\": \"extrapolated\" needs \"reference_error\""), std::string::npos)
+      << m;
+  m = error_of(write_sweep(zipped, json(), {{"reference", "richardson"}, {"reference_error", "verify/fem.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference: expected \"solved\" or \"extrapolated\", got \"richardson\""),
+            std::string::npos)
+      << m;
+  m = error_of(write_sweep(zipped, json(), {{"reference_errors", "verify/fem.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference_errors: unknown key; allowed keys here are: reference, "
+                   "reference_error"),
+            std::string::npos)
+      << m;
+  // The extrapolated samples exist only at the study's levels: a 12 mm FEM would be refused by every compare.
+  m = error_of(write_sweep(
+      json::array({{{"pointers", {"/geometry/mesh_size", "/meshless/node_spacing"}}, {"values", {{24, 16}, {12, 12}}}}}),
+      json(), {{"reference", "extrapolated"}, {"reference_error", "verify/fem.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference_error: the run /geometry/mesh_size = 12, /meshless/node_spacing = 12 "
+                   "has /geometry/mesh_size = 12 mm, which is not a level of the mesh study of lung_small_ci in " +
+                   study + " (levels 24, 18 mm)"),
+            std::string::npos)
+      << m;
+  write_study(dir_ / "verify" / "other.json", "lung_large_ci");
+  m = error_of(write_sweep(zipped, json(), {{"reference", "extrapolated"}, {"reference_error", "verify/other.json"}}));
+  EXPECT_NE(m.find("sweep.json: /compare/reference_error: " + (dir_ / "verify" / "other.json").string() +
+                   " holds no mesh study of the case \"lung_small_ci\""),
+            std::string::npos)
+      << m;
+  // With the solved reference any mesh size goes (the study only gives the error bar).
+  EXPECT_EQ(error_of(write_sweep(
+                json::array({{{"pointer", "/geometry/mesh_size"}, {"values", {12}}}}), json(),
+                {{"reference", "solved"}, {"reference_error", "verify/fem.json"}})),
+            "no error");
+}
+
+TEST_F(Sweep, FemRmseAgainstTheExtrapolatedSamplesIsAColumnEmptyWhenSolved) {
+  write_study(dir_ / "verify" / "fem.json");
+  const auto spec = experiments::load_sweep(write_sweep(
+      json::array({{{"pointers", {"/geometry/mesh_size", "/meshless/node_spacing"}}, {"values", {{24, 16}, {18, 12}}}}}),
+      {{"/compare", {{"models", {"enrichment"}}}}}, {{"reference", "solved"}, {"reference_error", "verify/fem.json"}}));
+  const auto header = experiments::runs_csv_header(spec);
+  // The models of /compare as /set leaves it give the model columns: enrichment only.
+  EXPECT_EQ(std::count(header.begin(), header.end(), "visibility_rmse_mm"), 0);
+  EXPECT_EQ(std::count(header.begin(), header.end(), "enrichment_rmse_mm"), 1);
+  ASSERT_GE(header.size(), 3u);
+  EXPECT_EQ(header[header.size() - 3], "fem_rmse_vs_extrapolated_mm");
+  std::atomic<int> calls{0};
+  experiments::run_sweep(spec, experiments::expand_sweep(spec), options(),
+                         [&](const experiments::SweepRun& run, const std::string&, const std::string&,
+                             const std::string&) { return fake_compare(run, &calls); });
+  const auto lines = csv_lines();
+  ASSERT_EQ(lines.size(), 3u);
+  const auto field_before_wall_seconds = [](const std::string& line) {
+    const std::size_t last = line.rfind(',');               // before error
+    const std::size_t wall = line.rfind(',', last - 1);     // before wall_seconds
+    const std::size_t fem = line.rfind(',', wall - 1);      // before fem_rmse_vs_extrapolated_mm
+    return line.substr(fem + 1, wall - fem - 1);
+  };
+  EXPECT_EQ(field_before_wall_seconds(lines[1]), "") << lines[1];  // 24 mm: the solved reference
+  EXPECT_EQ(field_before_wall_seconds(lines[2]), "0.05") << lines[2];
 }
 
 TEST_F(Sweep, CommandRejectsABadSweepBeforeRunningAnything) {
@@ -293,6 +489,20 @@ TEST_F(Sweep, ChildProcessRunsRecordTheirSummaryOrTheirError) {
   auto lines = csv_lines();
   ASSERT_EQ(lines.size(), 2u);
   EXPECT_NE(lines[1].find(",ok,0.5,10,0,,,0.25,,,0.5,"), std::string::npos) << lines[1];
+
+  // The sweep's compare options reach the child's command line.
+  std::ofstream(fake) << "#!/bin/sh\nmkdir -p \"$4\"\necho \"$@\" > \"$4/argv.txt\"\n"
+                         "echo '{\"n_samples\": 10, \"flagged_samples\": []}' > \"$4/summary.json\"\n";
+  fs::remove_all(dir_ / "out");
+  report = experiments::run_sweep(
+      spec, experiments::expand_sweep(spec), options(),
+      experiments::compare_in_child_process(fake.string(), false, {"--reference", "extrapolated"}));
+  EXPECT_EQ(report.succeeded, 1);
+  std::ifstream argv_in(dir_ / "out" / "runs" / experiments::expand_sweep(spec)[0].id / "argv.txt");
+  std::string argv_line;
+  std::getline(argv_in, argv_line);
+  EXPECT_NE(argv_line.find("compare "), std::string::npos) << argv_line;
+  EXPECT_NE(argv_line.find(" --no-plot --reference extrapolated"), std::string::npos) << argv_line;
 
   // ... and the real program's error line is recorded when the case fails after validation (the load point is
   // 220 mm off the lung: a geometry check, seconds into the run).

@@ -5,9 +5,11 @@
 #include <unistd.h>
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -31,6 +33,19 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+/// The runs.csv column of the reference's own RMSE against the extrapolated samples (empty when the reference is
+/// the solved FEM).
+const char* const kFemVsExtrapolated = "fem_rmse_vs_extrapolated_mm";
+
+/// That column's value from a compare summary.json.
+std::string fem_vs_extrapolated(const json& summary) {
+  if (!summary.is_object() || !summary.contains("reference")) return "";
+  const json& r = summary["reference"];
+  if (!r.is_object() || !r.contains("solved_minus_extrapolated_rms_mm")) return "";
+  const json& v = r["solved_minus_extrapolated_rms_mm"];
+  return v.is_number() ? fmt::format("{:.9g}", v.get<double>()) : std::string();
+}
 
 /// FNV-1a, 64 bits: a stable name for a case document (std::hash is not stable across builds).
 std::string fnv1a_hex(const std::string& text) {
@@ -107,12 +122,12 @@ SweepSpec load_sweep(const std::string& path) {
     throw core::CaseError(path, "", fmt::format("expected valid JSON: {}", e.what()));
   }
   if (!doc.is_object()) throw core::CaseError(path, "", "expected a JSON object, got " + core::describe_json(doc));
-  const std::set<std::string> allowed{"name", "description", "base_case", "set", "parameters", "workers"};
+  const std::set<std::string> allowed{"name", "description", "base_case", "set", "parameters", "compare", "workers"};
   for (const auto& [key, value] : doc.items())
     if (!allowed.count(key))
       throw core::CaseError(path, "/" + escape_token(key),
-                            "unknown key; allowed keys here are: base_case, description, name, parameters, set, "
-                            "workers");
+                            "unknown key; allowed keys here are: base_case, compare, description, name, parameters, "
+                            "set, workers");
   SweepSpec s;
   s.file = path;
   const core::JsonReader r(path, doc, "");
@@ -145,33 +160,109 @@ SweepSpec load_sweep(const std::string& path) {
       s.set.emplace_back(pointer, value);
     }
   }
+  if (doc.contains("compare")) {
+    const json& c = doc["compare"];
+    if (!c.is_object())
+      throw core::CaseError(path, "/compare",
+                            "expected an object {\"reference\": \"solved\" or \"extrapolated\", \"reference_error\": "
+                            "\"fem.json\"}, got " + core::describe_json(c));
+    for (const auto& [key, value] : c.items())
+      if (key != "reference" && key != "reference_error")
+        throw core::CaseError(path, "/compare/" + escape_token(key),
+                              "unknown key; allowed keys here are: reference, reference_error");
+    const core::JsonReader cr(path, c, "/compare");
+    s.compare.reference = cr.string("reference", std::string());
+    if (!s.compare.reference.empty() && s.compare.reference != "solved" && s.compare.reference != "extrapolated")
+      cr.fail("reference", fmt::format("expected \"solved\" or \"extrapolated\", got \"{}\"", s.compare.reference));
+    if (c.contains("reference_error")) {
+      fs::path file = cr.string("reference_error");
+      if (file.is_relative()) file = fs::path(path).parent_path() / file;
+      // absolute: the runs' compare may start in another folder
+      s.compare.reference_error = fs::absolute(file).lexically_normal().string();
+      std::ifstream study_in(s.compare.reference_error);
+      if (!study_in)
+        cr.fail("reference_error", fmt::format("expected an existing `tissue verify fem` result (fem.json), but \"{}\" "
+                                               "cannot be opened (the path is relative to the sweep file's folder)",
+                                               s.compare.reference_error));
+      const json study = json::parse(study_in, nullptr, false);
+      if (study.is_discarded() || !study.is_object() || !study.contains("mesh_convergence"))
+        cr.fail("reference_error", fmt::format("expected a `tissue verify fem` result with a mesh_convergence study, but "
+                                               "{} {}",
+                                               s.compare.reference_error,
+                                               study.is_discarded() ? "is not valid JSON" : "has no mesh_convergence"));
+    } else if (s.compare.reference == "extrapolated") {
+      throw core::CaseError(path, "/compare",
+                            "\"reference\": \"extrapolated\" needs \"reference_error\": the fem.json of `tissue verify "
+                            "fem` whose extrapolated samples stand for the reference");
+    }
+  }
   if (!doc.contains("parameters") || !doc["parameters"].is_array() || doc["parameters"].empty())
     throw core::CaseError(path, "/parameters",
-                          "expected a non-empty array of {\"pointer\": \"/json/pointer\", \"values\": [...]}");
+                          "expected a non-empty array of {\"pointer\": \"/json/pointer\", \"values\": [...]} or "
+                          "{\"pointers\": [\"/a\", \"/b\"], \"values\": [[a1, b1], ...]}");
   std::set<std::string> seen;
+  // the base document as the runs see it: `set` applied
+  json with_set = s.base_document;
+  for (const auto& [ptr, value] : s.set) with_set[json::json_pointer(ptr)] = value;
   for (std::size_t i = 0; i < doc["parameters"].size(); ++i) {
     const json& p = doc["parameters"][i];
     const std::string where = fmt::format("/parameters/{}", i);
+    if (!p.is_object())
+      throw core::CaseError(path, where,
+                            "expected an object {\"pointer\": ..., \"values\": [...]} or {\"pointers\": [...], "
+                            "\"values\": [[...], ...]}, got " + core::describe_json(p));
+    for (const auto& [key, value] : p.items())
+      if (key != "pointer" && key != "pointers" && key != "values")
+        throw core::CaseError(path, where + "/" + escape_token(key),
+                              "unknown key; allowed keys here are: pointer (one), pointers (several, zipped), values");
     const core::JsonReader pr(path, p, where);
     SweepParameter param;
-    param.pointer = pr.string("pointer");
+    std::vector<std::string> where_pointer;  // the JSON path of each pointer in the sweep file
+    if (p.contains("pointer") && p.contains("pointers"))
+      throw core::CaseError(path, where + "/pointers",
+                            "expected either \"pointer\" (one) or \"pointers\" (several, zipped), not both");
+    if (p.contains("pointers")) {
+      param.zipped = true;
+      const json& list = p["pointers"];
+      if (!list.is_array() || list.empty())
+        throw core::CaseError(path, where + "/pointers",
+                              "expected a non-empty array of JSON pointers that vary together, got " +
+                                  core::describe_json(list));
+      for (std::size_t j = 0; j < list.size(); ++j) {
+        if (!list[j].is_string())
+          throw core::CaseError(path, fmt::format("{}/pointers/{}", where, j),
+                                "expected a JSON pointer string, got " + core::describe_json(list[j]));
+        param.pointers.push_back(list[j].get<std::string>());
+        where_pointer.push_back(fmt::format("{}/pointers/{}", where, j));
+      }
+    } else {
+      param.pointers.push_back(pr.string("pointer"));
+      where_pointer.push_back(where + "/pointer");
+    }
+    const std::string names = fmt::format("{}", fmt::join(param.pointers, ", "));
     if (!p.contains("values") || !p["values"].is_array() || p["values"].empty())
-      pr.fail("values", "expected a non-empty array of values for " + param.pointer);
+      pr.fail("values", "expected a non-empty array of values for " + names);
     param.values = p["values"].get<std::vector<json>>();
     (void)pr.has("values");
-    for (const auto& [key, value] : p.items())
-      if (key != "pointer" && key != "values")
-        throw core::CaseError(path, where + "/" + escape_token(key), "unknown key; allowed keys here are: pointer, values");
-    // the base document as the runs see it: `set` applied
-    json with_set = s.base_document;
-    for (const auto& [ptr, value] : s.set) with_set[json::json_pointer(ptr)] = value;
-    if (const std::string problem = pointer_problem(param.pointer, with_set); !problem.empty())
-      throw core::CaseError(path, where + "/pointer", problem);
-    if (!seen.insert(param.pointer).second)
-      throw core::CaseError(path, where + "/pointer", param.pointer + " is swept twice; list its values once");
-    for (const auto& [ptr, value] : s.set)
-      if (ptr == param.pointer)
-        throw core::CaseError(path, where + "/pointer", param.pointer + " is also in /set; keep it in one place");
+    if (param.zipped)
+      for (std::size_t k = 0; k < param.values.size(); ++k)
+        if (!param.values[k].is_array() || param.values[k].size() != param.pointers.size())
+          throw core::CaseError(path, fmt::format("{}/values/{}", where, k),
+                                fmt::format("expected an array of {} values, one for each of {} (in that order), got {}",
+                                            param.pointers.size(), names,
+                                            param.values[k].is_array()
+                                                ? fmt::format("an array of {}", param.values[k].size())
+                                                : core::describe_json(param.values[k])));
+    for (std::size_t j = 0; j < param.pointers.size(); ++j) {
+      const std::string& pointer = param.pointers[j];
+      if (const std::string problem = pointer_problem(pointer, with_set); !problem.empty())
+        throw core::CaseError(path, where_pointer[j], problem);
+      if (!seen.insert(pointer).second)
+        throw core::CaseError(path, where_pointer[j], pointer + " is swept twice; list its values once");
+      for (const auto& [ptr, value] : s.set)
+        if (ptr == pointer)
+          throw core::CaseError(path, where_pointer[j], pointer + " is also in /set; keep it in one place");
+    }
     s.parameters.push_back(param);
   }
   return s;
@@ -186,45 +277,118 @@ std::vector<SweepRun> expand_sweep(const SweepSpec& spec) {
                           fmt::format("the base case {} {}is invalid: {}", spec.base_case_file,
                                       spec.set.empty() ? "" : "with /set applied ", e.what()));
   }
-  // Each value alone, so that a bad value is named precisely.
+  // Each value alone, so that a bad value is named precisely (a zipped parameter's values one pointer at a
+  // time, then together).
   for (std::size_t i = 0; i < spec.parameters.size(); ++i)
     for (std::size_t k = 0; k < spec.parameters[i].values.size(); ++k) {
       const auto& param = spec.parameters[i];
+      std::vector<std::pair<std::string, json>> together;
+      std::string described;
+      for (std::size_t j = 0; j < param.pointers.size(); ++j) {
+        const std::string& pointer = param.pointers[j];
+        const json& v = param.value(k, j);
+        together.emplace_back(pointer, v);
+        described += fmt::format("{}{} = {}", j ? ", " : "", pointer, value_text(v));
+        try {
+          generate_case(spec, {{pointer, v}});
+        } catch (const core::CaseError& e) {
+          throw core::CaseError(spec.file,
+                                param.zipped ? fmt::format("/parameters/{}/values/{}/{}", i, k, j)
+                                             : fmt::format("/parameters/{}/values/{}", i, k),
+                                fmt::format("{} = {} makes an invalid case: {}", pointer, value_text(v), e.what()));
+        }
+      }
+      if (!param.zipped) continue;
       try {
-        generate_case(spec, {{param.pointer, param.values[k]}});
+        generate_case(spec, together);
       } catch (const core::CaseError& e) {
         throw core::CaseError(spec.file, fmt::format("/parameters/{}/values/{}", i, k),
-                              fmt::format("{} = {} makes an invalid case: {}", param.pointer,
-                                          value_text(param.values[k]), e.what()));
+                              fmt::format("{} together make an invalid case: {}", described, e.what()));
       }
     }
+  // The extrapolated reference exists only at the mesh study's levels: refuse any other mesh size now, not after
+  // hours of runs (whether a run's FEM samples equal its level's is checked by its compare, after the FEM solve).
+  json study_levels;  // case name -> levels, when the extrapolated reference is asked for
+  if (spec.compare.reference == "extrapolated") {
+    std::ifstream in(spec.compare.reference_error);
+    const json study = json::parse(in, nullptr, false);
+    if (!study.is_discarded() && study.contains("mesh_convergence")) study_levels = study["mesh_convergence"];
+  }
+  const auto check_study_level = [&](const json& document, const std::string& combination) {
+    if (spec.compare.reference != "extrapolated") return;
+    const core::Case c = core::parse_case(document, spec.base_case_file);
+    const std::string file = spec.compare.reference_error;
+    if (!study_levels.is_object() || !study_levels.contains(c.name))
+      throw core::CaseError(spec.file, "/compare/reference_error",
+                            fmt::format("{} holds no mesh study of the case \"{}\" (run {}), so compare would refuse "
+                                        "the extrapolated reference; run `tissue verify fem --config {}`",
+                                        file, c.name, combination, spec.base_case_file));
+    const json& study = study_levels[c.name];
+    if (!study.contains("richardson") || !study["richardson"].contains("extrapolated_sample_displacements_mm"))
+      throw core::CaseError(spec.file, "/compare/reference_error",
+                            fmt::format("the mesh study of {} in {} holds no extrapolated samples "
+                                        "(richardson.extrapolated_sample_displacements_mm)",
+                                        c.name, file));
+    std::string sizes;
+    const double mesh_size_mm = c.geometry.mesh_size * 1e3;  // the case holds metres
+    for (const auto& level : study.value("levels", json::array())) {
+      const double h = level.value("mesh_size_mm", -1.0);
+      if (std::abs(h - mesh_size_mm) <= 1e-9) return;  // as compare_metrics.cpp reference_error_bar
+      sizes += fmt::format("{}{:g}", sizes.empty() ? "" : ", ", h);
+    }
+    throw core::CaseError(spec.file, "/compare/reference_error",
+                          fmt::format("the run {} has /geometry/mesh_size = {:g} mm, which is not a level of the mesh "
+                                      "study of {} in {} (levels {} mm): compare would refuse the extrapolated "
+                                      "reference; sweep the mesh size over the study's levels",
+                                      combination, mesh_size_mm, c.name, file, sizes));
+  };
+  const std::vector<std::string> compare_args = spec.compare.arguments();
+  std::string compare_key;  // the compare options change the results, so they are part of the run's id
+  for (const auto& a : compare_args) compare_key += "\n" + a;
   // The Cartesian product, last parameter fastest.
+  const std::vector<std::string> columns = spec.columns();
   std::vector<SweepRun> runs;
   std::vector<std::size_t> index(spec.parameters.size(), 0);
   std::set<std::string> ids;
   while (true) {
     std::vector<std::pair<std::string, json>> assignments;
     SweepRun run;
+    for (std::size_t i = 0; i < spec.parameters.size(); ++i)
+      for (std::size_t j = 0; j < spec.parameters[i].pointers.size(); ++j) {
+        const json& v = spec.parameters[i].value(index[i], j);
+        assignments.emplace_back(spec.parameters[i].pointers[j], v);
+        run.values.push_back(v);
+      }
     std::string combination;
-    for (std::size_t i = 0; i < spec.parameters.size(); ++i) {
-      const json& v = spec.parameters[i].values[index[i]];
-      assignments.emplace_back(spec.parameters[i].pointer, v);
-      run.values.push_back(v);
-      combination += fmt::format("{}{} = {}", i ? ", " : "", spec.parameters[i].pointer, value_text(v));
-    }
+    for (std::size_t c = 0; c < columns.size(); ++c)
+      combination += fmt::format("{}{} = {}", c ? ", " : "", columns[c], value_text(run.values[c]));
     try {
       run.document = generate_case(spec, assignments);
     } catch (const core::CaseError& e) {
       throw core::CaseError(spec.file, "/parameters",
                             fmt::format("the combination {} makes an invalid case: {}", combination, e.what()));
     }
-    run.id = fnv1a_hex(run.document.dump());
+    check_study_level(run.document, combination);
+    run.id = fnv1a_hex(run.document.dump() + compare_key);
     if (ids.insert(run.id).second) runs.push_back(std::move(run));  // equal values twice: one run
     std::size_t i = spec.parameters.size();
     while (i > 0 && ++index[i - 1] == spec.parameters[i - 1].values.size()) index[--i] = 0;
     if (i == 0) break;
   }
   return runs;
+}
+
+std::vector<std::string> SweepCompareOptions::arguments() const {
+  std::vector<std::string> args;
+  if (!reference.empty()) args.insert(args.end(), {"--reference", reference});
+  if (!reference_error.empty()) args.insert(args.end(), {"--reference-error", reference_error});
+  return args;
+}
+
+std::vector<std::string> SweepSpec::columns() const {
+  std::vector<std::string> out;
+  for (const auto& p : parameters) out.insert(out.end(), p.pointers.begin(), p.pointers.end());
+  return out;
 }
 
 std::string csv_field(const std::string& text) {
@@ -240,7 +404,9 @@ std::string csv_field(const std::string& text) {
 /// The scored models of every run: the base case's /compare/models (a sweep that changes the list itself still gets
 /// the base case's columns; the other models are in each run's summary.json).
 std::vector<std::string> scored_models(const SweepSpec& spec) {
-  const nlohmann::json* list = spec.base_document.contains("compare") ? &spec.base_document["compare"] : nullptr;
+  json base = spec.base_document;  // with `set` applied: a sweep may set /compare/models for every run
+  for (const auto& [pointer, value] : spec.set) base[json::json_pointer(pointer)] = value;
+  const nlohmann::json* list = base.contains("compare") ? &base["compare"] : nullptr;
   if (!list || !list->contains("models")) return core::CompareSpec{}.models;
   std::vector<std::string> names;
   for (const auto& m : (*list)["models"])
@@ -250,8 +416,9 @@ std::vector<std::string> scored_models(const SweepSpec& spec) {
 
 std::vector<std::string> runs_csv_header(const SweepSpec& spec) {
   std::vector<std::string> header{"run_id", "status"};
-  for (const auto& p : spec.parameters) header.push_back(p.pointer);
+  for (const auto& p : spec.columns()) header.push_back(p);
   for (const auto& c : compare_row_columns(scored_models(spec))) header.push_back(c);
+  header.push_back(kFemVsExtrapolated);
   header.push_back("wall_seconds");
   header.push_back("error");
   return header;
@@ -356,12 +523,14 @@ bool SweepOptions::IsValid(std::string* why) const {
   return true;
 }
 
-RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot) {
-  return [tissue_binary, plot](const SweepRun&, const std::string& case_file, const std::string& run_dir,
-                               const std::string& log_file) {
+RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot,
+                                     const std::vector<std::string>& compare_arguments) {
+  return [tissue_binary, plot, compare_arguments](const SweepRun&, const std::string& case_file,
+                                                  const std::string& run_dir, const std::string& log_file) {
     RunOutcome outcome;
     std::vector<std::string> argv{tissue_binary, "compare", case_file, "--out", run_dir};
     if (!plot) argv.push_back("--no-plot");
+    argv.insert(argv.end(), compare_arguments.begin(), compare_arguments.end());
     const ProcessOutcome p = run_process(argv, log_file);
     if (!p.ok()) {
       // The child's own `error: ...` line says why; fall back on how it ended.
@@ -423,10 +592,11 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
   Progress progress("sweep " + spec.name, static_cast<int>(pending.size()));
   std::mutex mutex;
   std::size_t next = 0;
+  const std::vector<std::string> columns = spec.columns();
   const auto describe = [&](const SweepRun& run) {
     std::string s;
-    for (std::size_t i = 0; i < spec.parameters.size(); ++i)
-      s += fmt::format("{}{} = {}", i ? ", " : "", spec.parameters[i].pointer, value_text(run.values[i]));
+    for (std::size_t i = 0; i < columns.size(); ++i)
+      s += fmt::format("{}{} = {}", i ? ", " : "", columns[i], value_text(run.values[i]));
     return s;
   };
   std::exception_ptr fatal;  // an append that failed: the record would be wrong, so the sweep stops
@@ -459,6 +629,7 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
       const std::vector<std::string> values = outcome.ok ? compare_row_values(outcome.summary, models)
                                                          : std::vector<std::string>(compare_row_columns(models).size());
       row.insert(row.end(), values.begin(), values.end());
+      row.push_back(outcome.ok ? fem_vs_extrapolated(outcome.summary) : std::string());
       row.push_back(fmt::format("{:.3f}", outcome.wall_seconds));
       row.push_back(outcome.ok ? "" : outcome.error);
       std::lock_guard<std::mutex> guard(mutex);
@@ -497,22 +668,30 @@ namespace {
 void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& runs, const fs::path& out, bool plot) {
   RunsCsv csv((out / "runs.csv").string(), runs_csv_header(spec));
   std::vector<std::string> header{"run_id", "status"};
-  for (const auto& p : spec.parameters) header.push_back(p.pointer);
+  const std::vector<std::string> pointers = spec.columns();
+  for (const auto& p : pointers) header.push_back(p);
   const std::vector<std::string> models = scored_models(spec);
-  const std::vector<std::string> columns = compare_row_columns(models);
+  std::vector<std::string> columns = compare_row_columns(models);
+  columns.push_back(kFemVsExtrapolated);
   for (const auto& c : columns) header.push_back(c);
+  const bool extrapolated = spec.compare.reference == "extrapolated";
   std::string summary_csv = join_row(header);
   std::string md = fmt::format("# Sweep {}\n\n{}{}Produced by `tissue sweep {}` (base case {}). One row per run; "
-                               "RMSE of eq. 34 against the FEM reference, times in seconds.\n\n|",
+                               "RMSE of eq. 34 against the {}, times in seconds.\n\n|",
                                spec.name, spec.description, spec.description.empty() ? "" : "\n\n", spec.file,
-                               spec.base_case_file);
-  for (const auto& p : spec.parameters) md += " " + p.pointer + " |";
+                               spec.base_case_file,
+                               extrapolated ? "extrapolated FEM reference (the samples Richardson-extrapolated by the "
+                                              "mesh study " + spec.compare.reference_error + "; the FEM's own RMSE "
+                                              "against them is the column \"FEM vs extrapolated\")"
+                                            : std::string("FEM reference"));
+  for (const auto& p : pointers) md += " " + p + " |";
   md += " status |";
   for (const auto& m : models) md += fmt::format(" RMSE {} [mm] | {} / peak | without flagged, {} [mm] |", m, m, m);
+  if (extrapolated) md += " FEM vs extrapolated [mm] |";
   md += " reference [s] |";
   for (const auto& m : models) md += fmt::format(" {} [s] |", m);
   md += " run |\n|";
-  for (std::size_t i = 0; i < spec.parameters.size() + 4 * models.size() + 3; ++i) md += "---|";
+  for (std::size_t i = 0; i < pointers.size() + 4 * models.size() + 3 + (extrapolated ? 1 : 0); ++i) md += "---|";
   md += "\n";
   for (const auto& run : runs) {
     const std::string status = csv.last_status(run.id);
@@ -523,7 +702,10 @@ void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& run
     if (status == "ok") {
       std::ifstream in(out / "runs" / run.id / "summary.json");
       summary = json::parse(in, nullptr, false);
-      if (!summary.is_discarded()) values = compare_row_values(summary, models);
+      if (!summary.is_discarded()) {
+        values = compare_row_values(summary, models);
+        values.push_back(fem_vs_extrapolated(summary));
+      }
     }
     row.insert(row.end(), values.begin(), values.end());
     summary_csv += join_row(row);
@@ -538,6 +720,7 @@ void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& run
     for (const auto& m : models)
       md += fmt::format(" {} | {} | {} |", column(m + "_rmse_mm"), column(m + "_rmse_relative"),
                         column(m + "_rmse_unflagged_mm"));
+    if (extrapolated) md += " " + column(kFemVsExtrapolated) + " |";
     md += " " + column("fem_seconds") + " |";
     for (const auto& m : models) md += " " + column(m + "_seconds") + " |";
     md += fmt::format(" {} |\n", status == "failed" ? "failed: logs/" + run.id + ".log" : "runs/" + run.id);
@@ -546,10 +729,13 @@ void write_sweep_summary(const SweepSpec& spec, const std::vector<SweepRun>& run
   write_replacing((out / "summary.md").string(), md);
   if (!plot) return;
   const std::string log = (out / "plot.log").string();
-  const ProcessOutcome p =
-      run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_sweep.py", (out / "summary.csv").string(),
-                   (out / "sweep.png").string(), "--x", spec.parameters.front().pointer, "--title", spec.name},
-                  log);
+  // x: the first parameter's (first) pointer; the other pointers of a zipped first parameter vary with it.
+  std::vector<std::string> argv{plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_sweep.py",
+                                (out / "summary.csv").string(), (out / "sweep.png").string(),
+                                "--x", spec.parameters.front().pointers.front(), "--title", spec.name};
+  for (std::size_t j = 1; j < spec.parameters.front().pointers.size(); ++j)
+    argv.insert(argv.end(), {"--with", spec.parameters.front().pointers[j]});
+  const ProcessOutcome p = run_process(argv, log);
   if (p.ok())
     fs::remove(log);
   else
@@ -567,17 +753,25 @@ int run_sweep_command(const std::string& sweep_file, const SweepOptions& options
   const fs::path out = options.out_dir.empty() ? fs::path("results/sweeps") / spec.name : fs::path(options.out_dir);
   if (dry_run) {
     std::cout << fmt::format("{}: {} valid runs (results would go to {}):\n", sweep_file, runs.size(), out.string());
+    const std::vector<std::string> columns = spec.columns();
     for (const auto& run : runs) {
       std::cout << "  " << run.id;
-      for (std::size_t i = 0; i < spec.parameters.size(); ++i)
-        std::cout << fmt::format("  {} = {}", spec.parameters[i].pointer, value_text(run.values[i]));
+      for (std::size_t i = 0; i < columns.size(); ++i)
+        std::cout << fmt::format("  {} = {}", columns[i], value_text(run.values[i]));
       std::cout << "\n";
     }
+    if (!spec.compare.arguments().empty())
+      std::cout << fmt::format("each run: tissue compare CASE --out DIR --no-plot {}{}\n",
+                               fmt::join(spec.compare.arguments(), " "),
+                               spec.compare.reference == "extrapolated"
+                                   ? " (every run's mesh size is a level of that study; whether its FEM samples "
+                                     "equal the level's is checked by each compare after its FEM solve)"
+                                   : "");
     return 0;
   }
   SweepOptions opt = options;
   opt.out_dir = out.string();
-  const SweepReport report = run_sweep(spec, runs, opt, compare_in_child_process(tissue_binary, false));
+  const SweepReport report = run_sweep(spec, runs, opt, compare_in_child_process(tissue_binary, false, spec.compare.arguments()));
   write_sweep_summary(spec, runs, out, options.plot);
   std::cout << fmt::format("{}: {} runs, {} skipped (done before), {} succeeded, {} failed; wrote {}\n", spec.name,
                            report.total, report.skipped, report.succeeded, report.failed,

@@ -1,6 +1,8 @@
 #pragma once
 // `tissue sweep SWEEP.json`: a base case, values to set for every run, and parameters (RFC 6901 JSON pointers
-// into the case, each with a list of values); the runs are the Cartesian product of the parameter values.
+// into the case, each with a list of values; a zipped parameter names several pointers that take their values
+// together); the runs are the Cartesian product of the parameter values. Optional compare options (the
+// reference's samples and its mesh study) are passed to every run's `tissue compare`.
 // Every generated case is validated with core::parse_case before anything runs. Each run is one
 // `tissue compare` in a child process (a crash or an out-of-memory kill ends that run only); `workers` runs
 // go at once. One row per finished run is appended to runs.csv; a rerun skips the runs already done.
@@ -19,8 +21,21 @@
 namespace experiments {
 
 struct SweepParameter {
-  std::string pointer;                ///< RFC 6901, e.g. /meshless/node_spacing
-  std::vector<nlohmann::json> values;
+  /// RFC 6901, e.g. /meshless/node_spacing. One pointer ("pointer" in the file), or several that vary together
+  /// ("pointers": a zipped parameter).
+  std::vector<std::string> pointers;
+  bool zipped = false;                ///< given as "pointers": each value is an array of pointers.size() values
+  std::vector<nlohmann::json> values; ///< as in the file: a value, or (zipped) an array of one value per pointer
+  /// The value of pointers[j] in values[k].
+  const nlohmann::json& value(std::size_t k, std::size_t j) const { return zipped ? values[k][j] : values[k]; }
+};
+
+/// Options passed to each run's `tissue compare` (the sweep file's "compare" object).
+struct SweepCompareOptions {
+  std::string reference;        ///< "" (compare's default), "solved" or "extrapolated": --reference
+  std::string reference_error;  ///< "" or a fem.json, resolved against the sweep file's folder: --reference-error
+  /// The command-line arguments for `tissue compare` ("" options left out).
+  std::vector<std::string> arguments() const;
 };
 
 struct SweepSpec {
@@ -31,7 +46,10 @@ struct SweepSpec {
   nlohmann::json base_document;
   std::vector<std::pair<std::string, nlohmann::json>> set;  ///< pointer -> value, applied to every run
   std::vector<SweepParameter> parameters;
+  SweepCompareOptions compare;
   int workers = 1;
+  /// Every swept pointer, in parameter order (a zipped parameter's in its order): the runs.csv columns.
+  std::vector<std::string> columns() const;
 };
 
 /// Read a sweep file (schema in docs/EXPERIMENTS.md). Throws core::CaseError naming the sweep file, the JSON
@@ -39,14 +57,18 @@ struct SweepSpec {
 SweepSpec load_sweep(const std::string& path);
 
 struct SweepRun {
-  std::string id;                      ///< 16 hex digits: FNV-1a of the case document
-  std::vector<nlohmann::json> values;  ///< one per parameter
+  std::string id;                      ///< 16 hex digits: FNV-1a of the case document (and the compare options)
+  std::vector<nlohmann::json> values;  ///< one per swept pointer (SweepSpec::columns)
   nlohmann::json document;             ///< the generated case, validated
 };
 
 /// The Cartesian product (the last parameter varies fastest). Every value and every generated case is
 /// validated with core::parse_case; a failure throws core::CaseError naming the sweep file, the parameter's
-/// value (/parameters/i/values/k), the pointer, the value and what the case schema expected.
+/// value (/parameters/i/values/k, or /parameters/i/values/k/j for one pointer of a zipped parameter), the
+/// pointer, the value and what the case schema expected. With "compare": {"reference": "extrapolated"}, every
+/// run's case name and /geometry/mesh_size must be a level of the mesh study in reference_error (else
+/// core::CaseError naming /compare/reference_error); whether its samples equal the level's is checked by the
+/// run's compare once the FEM is solved.
 std::vector<SweepRun> expand_sweep(const SweepSpec& spec);
 
 /// What one run gave: the compare summary.json when it succeeded, the reason when not.
@@ -61,8 +83,9 @@ struct RunOutcome {
 using RunFunction = std::function<RunOutcome(const SweepRun& run, const std::string& case_file,
                                              const std::string& run_dir, const std::string& log_file)>;
 
-/// `tissue compare CASE --out RUN_DIR [--no-plot]` in a child process of `tissue_binary`.
-RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot);
+/// `tissue compare CASE --out RUN_DIR [--no-plot] [compare_arguments...]` in a child process of `tissue_binary`.
+RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot,
+                                     const std::vector<std::string>& compare_arguments = {});
 
 struct SweepOptions {
   std::string out_dir;        ///< default results/sweeps/<name>
@@ -84,8 +107,8 @@ struct SweepReport {
 SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, const SweepOptions& options,
                       const RunFunction& run_function);
 
-/// The runs.csv header for a sweep: run_id, status, one column per parameter pointer, the compare columns
-/// (compare_row_columns), wall_seconds, error.
+/// The runs.csv header for a sweep: run_id, status, one column per swept pointer, the compare columns
+/// (compare_row_columns), fem_rmse_vs_extrapolated_mm, wall_seconds, error.
 std::vector<std::string> runs_csv_header(const SweepSpec& spec);
 
 /// One CSV field: quoted (RFC 4180) when it holds a comma, a quote or a line break; line breaks become spaces
