@@ -172,10 +172,14 @@ def draw(path, levels, meshless, title):
                         xytext=(5, -10), fontsize=8)
     ax.set_xscale("log")
     ax.set_yscale("log")
-    plain = matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")  # a narrow log range: plain numbers
-    for axis in (ax.xaxis, ax.yaxis):
+    # A narrow log range has few decade ticks: put plain-numbered ticks at round values inside the data's range.
+    plain = matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}")
+    for axis, lim, mantissas in ((ax.xaxis, ax.get_xlim(), (1, 2, 3, 5)),
+                                 (ax.yaxis, ax.get_ylim(), (1, 1.2, 1.4, 1.6, 1.8, 2, 2.5, 3, 4, 5, 6, 7, 8, 9))):
+        ticks = [m * 10.0 ** e for e in range(-3, 6) for m in mantissas if lim[0] <= m * 10.0 ** e <= lim[1]]
+        axis.set_major_locator(matplotlib.ticker.FixedLocator(ticks))
+        axis.set_minor_locator(matplotlib.ticker.NullLocator())
         axis.set_major_formatter(plain)
-        axis.set_minor_formatter(plain)
     ax.set_xlabel("wall time of the model's solve [s]")
     ax.set_ylabel("RMSE against the extrapolated reference [% of peak]")
     ax.grid(True, which="both", alpha=0.3)
