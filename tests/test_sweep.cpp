@@ -210,6 +210,11 @@ TEST_F(Sweep, BadZippedParametersAreRejectedNamingThePointerOrValue) {
                    "zipped), not both"),
             std::string::npos)
       << m;
+  m = error_of(write_sweep(json::array({{{"values", {{24, 16}}}}})));
+  EXPECT_NE(m.find("sweep.json: /parameters/0: expected \"pointer\" (one JSON pointer) or \"pointers\" (several "
+                   "that vary together)"),
+            std::string::npos)
+      << m;
   m = error_of(write_sweep(json::array({{{"pointers", json::array()}, {"values", {{24, 16}}}}})));
   EXPECT_NE(m.find("sweep.json: /parameters/0/pointers: expected a non-empty array of JSON pointers"),
             std::string::npos)

@@ -221,6 +221,10 @@ SweepSpec load_sweep(const std::string& path) {
     if (p.contains("pointer") && p.contains("pointers"))
       throw core::CaseError(path, where + "/pointers",
                             "expected either \"pointer\" (one) or \"pointers\" (several, zipped), not both");
+    if (!p.contains("pointer") && !p.contains("pointers"))
+      throw core::CaseError(path, where,
+                            "expected \"pointer\" (one JSON pointer) or \"pointers\" (several that vary together), "
+                            "beside \"values\"");
     if (p.contains("pointers")) {
       param.zipped = true;
       const json& list = p["pointers"];
