@@ -11,7 +11,14 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include <Eigen/SVD>
+#include <Eigen/SparseLU>
+#include <algorithm>
+#include <sstream>
+
 #include "meshless/lrpim/lrpim_case.hpp"
+#include "meshless/lrpim/lrpim_model.hpp"
+#include "meshless/mls/node_search.hpp"
 #include "reference_fem/fem_model.hpp"
 
 namespace meshless::lrpim {
@@ -26,7 +33,13 @@ LrpimCaseOptions lung_options() {
   if (const char* k = std::getenv("LRPIM_KRYLOV_OPTIONS")) options.krylov_options = k;
   if (const char* s = std::getenv("LRPIM_SOLVER"); s && std::string(s) == "mumps")
     options.linear_solver = LrpimLinearSolver::mumps;
+  if (const char* s = std::getenv("LRPIM_SOLVER"); s && std::string(s) == "sparse_lu")
+    options.linear_solver = LrpimLinearSolver::sparse_lu;
   if (std::getenv("LRPIM_NO_DIVERGENCE_CORRECTION")) options.divergence_correction = false;
+  if (std::getenv("LRPIM_NODAL_SPACING")) options.local_spacing = false;
+  if (const char* a = std::getenv("LRPIM_ALPHA_Q")) options.alpha_q = std::atof(a);
+  if (const char* a = std::getenv("LRPIM_NEIGHBOURS")) options.rpim.num_neighbours = std::atoi(a);
+  if (const char* a = std::getenv("LRPIM_ALPHA_C")) options.rpim.alpha_c = std::atof(a);
   options.on_step = [](const LrpimStepReport& s) {
     std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
               << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds
@@ -104,6 +117,137 @@ TEST(LrpimLung, DISABLED_AngularRuleStudyOnLungSmall) {
     print_run("rule " + std::to_string(polar) + " x " + std::to_string(azimuthal) + " x " + std::to_string(radial), run,
               score(run.sample_displacements, fem.sample_displacements));
   }
+}
+
+// Diagnostics of the CI-sized lung's first linear system (docs/LRPIM.md §5): the tangent at u = 0 for the first
+// step, factorised by Eigen's SparseLU; the solution's largest nodal displacements and the tangent's smallest mode
+// (inverse iteration) are listed with what each of their nodes has: distance to the surface, nearest-neighbour
+// distance, local volume measure, the diagonal block. Environment: LRPIM_ALPHA_Q, LRPIM_NEIGHBOURS, LRPIM_ALPHA_C,
+// LRPIM_NO_DIVERGENCE_CORRECTION. Disabled: a measurement, not a test.
+TEST(LrpimLung, DISABLED_FirstLinearSystemOfTheCiLung) {
+  const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
+  core::GeometryOptions geometry;
+  geometry.build_fem_mesh = false;
+  const core::Geometry g = core::build_geometry(c, geometry);
+  LrpimCaseOptions options = lung_options();
+  LrpimProblem problem = lrpim_problem_from_case(c, g, options);
+  const double h = problem.node_spacing;
+  const SurfaceBody body = *problem.body;
+  const double t0 = problem.step_times.front();
+  LrpimModel model(problem);
+  const int n = model.statistics().num_nodes;
+  {
+    std::vector<double> d = model.node_spacings();
+    std::sort(d.begin(), d.end());
+    std::cout << "node spacing d_i [mm]: min " << 1e3 * d.front() << ", 10 % " << 1e3 * d[n / 10] << ", median "
+              << 1e3 * d[n / 2] << ", max " << 1e3 * d.back() << std::endl;
+  }
+  LrpimMatrix k;
+  Eigen::VectorXd r;
+  model.linear_system(t0, t0, &k, &r);
+  std::cout << n << " nodes, " << k.nonZeros() << " entries, min rcond " << model.statistics().min_rcond
+            << ", defect " << model.statistics().divergence_defect << ", |r| " << r.norm() << std::endl;
+  // Per node: measure of its clipped sphere, distance to the surface, nearest neighbour.
+  std::vector<double> measure(n, 0.0);
+  std::vector<int> points(n, 0);
+  for (const LocalIntegrationPoint& p : model.volume_points()) measure[p.test_node] += p.weight, ++points[p.test_node];
+  const NodeSearch search(problem.nodes);
+  auto describe = [&](int i) {
+    const Eigen::Vector3d x = problem.nodes.row(i).transpose();
+    const std::vector<int> near = search.nearest(x, 2);
+    const double nn = (problem.nodes.row(near[1]) - problem.nodes.row(i)).norm();
+    const double ds = body.distance_to_surface(x, 3 * h);
+    const double r_q = problem.alpha_q * model.node_spacings()[i];
+    Eigen::Matrix3d d;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) d(a, b) = k.coeff(3 * i + a, 3 * i + b);
+    double row_norm = 0.0;
+    for (int a = 0; a < 3; ++a) row_norm = std::max(row_norm, k.row(3 * i + a).norm());
+    Eigen::JacobiSVD<Eigen::Matrix3d> svd(d);
+    std::ostringstream s;
+    s << "node " << i << " at (" << 1e3 * x.transpose() << ") mm: surface " << 1e3 * ds << " mm, nn " << 1e3 * nn
+      << " mm, " << points[i] << " points, |Os|/sphere " << measure[i] / (4.0 / 3.0 * M_PI * r_q * r_q * r_q)
+      << ", diag sv " << svd.singularValues().transpose() / row_norm << " of row " << row_norm
+      << ", k_s " << (problem.support_stiffness ? problem.support_stiffness(x) : 0.0);
+    return s.str();
+  };
+  Eigen::SparseMatrix<double> kc = k;
+  kc.makeCompressed();
+  Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+  lu.analyzePattern(kc);
+  lu.factorize(kc);
+  ASSERT_EQ(lu.info(), Eigen::Success) << lu.lastErrorMessage();
+  const Eigen::VectorXd du = lu.solve(r);
+  std::cout << "relative residual of the solve " << (kc * du - r).norm() / r.norm() << std::endl;
+  auto top = [&](const Eigen::VectorXd& v, int count, const std::string& what) {
+    std::vector<std::pair<double, int>> m(n);
+    for (int i = 0; i < n; ++i) m[i] = {v.segment<3>(3 * i).norm(), i};
+    std::sort(m.rbegin(), m.rend());
+    std::vector<double> sorted(n);
+    for (int i = 0; i < n; ++i) sorted[i] = m[i].first;
+    std::cout << what << ": largest " << sorted[0] << ", 10th " << sorted[9] << ", median " << sorted[n / 2] << "\n";
+    for (int j = 0; j < count; ++j) std::cout << "  " << m[j].first << "  " << describe(m[j].second) << "\n";
+  };
+  top(du * 1e3, 20, "first solve |du| [mm]");
+  {
+    // The first Newton iterate: its strains per test node, and the residual there.
+    const Eigen::VectorXd u1 = -du;
+    std::vector<std::pair<double, int>> strain(n, {0.0, 0});
+    for (int i = 0; i < n; ++i) strain[i].second = i;
+    for (const LocalIntegrationPoint& p : model.volume_points()) {
+      Eigen::Matrix3d grad = Eigen::Matrix3d::Zero();
+      for (int a = 0; a < static_cast<int>(p.support.size()); ++a)
+        grad += u1.segment<3>(3 * p.support[a]) * p.dphi.col(a).transpose();
+      const double e = (0.5 * (grad + grad.transpose())).norm();
+      strain[p.test_node].first = std::max(strain[p.test_node].first, e);
+    }
+    std::sort(strain.rbegin(), strain.rend());
+    std::cout << "first iterate's largest strain per test node: " << strain[0].first << ", 10th " << strain[9].first
+              << ", median " << strain[n / 2].first << "\n";
+    for (int j = 0; j < 8; ++j) std::cout << "  " << strain[j].first << "  " << describe(strain[j].second) << "\n";
+    LrpimModel& m = const_cast<LrpimModel&>(model);
+    m.set_nodal_displacements(u1);
+    LrpimMatrix k1;
+    Eigen::VectorXd r1;
+    try {
+      m.linear_system(t0, t0, &k1, &r1);
+      std::cout << "residual after the first iteration / first: " << r1.norm() / r.norm() << "\n";
+      top(r1 / r.norm(), 8, "residual after one iteration (relative)");
+      const Eigen::VectorXd du2 = lu.solve(r1);
+      top(du2 * 1e3, 8, "second correction with the first factors [mm]");
+    } catch (const std::exception& e) {
+      std::cout << "first iterate: " << e.what() << "\n";
+    }
+    m.set_nodal_displacements(Eigen::VectorXd::Zero(3 * n));
+  }
+  Eigen::VectorXd x = Eigen::VectorXd::Random(3 * n);
+  double lambda = 0.0;
+  for (int it = 0; it < 30; ++it) {
+    x.normalize();
+    const Eigen::VectorXd y = lu.solve(x);
+    lambda = 1.0 / y.norm();
+    x = y;
+  }
+  x.normalize();
+  std::cout << "smallest |K x| / |x| (inverse iteration) " << (kc * x).norm() << " against the median diagonal ";
+  std::vector<double> diag(3 * n);
+  for (int i = 0; i < 3 * n; ++i) diag[i] = std::abs(kc.coeff(i, i));
+  std::nth_element(diag.begin(), diag.begin() + 3 * n / 2, diag.end());
+  std::cout << diag[3 * n / 2] << " (lambda " << lambda << ")" << std::endl;
+  top(x, 20, "smallest mode");
+  // The nodes with the smallest diagonal blocks relative to their rows.
+  std::vector<std::pair<double, int>> weak(n);
+  for (int i = 0; i < n; ++i) {
+    Eigen::Matrix3d d;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) d(a, b) = kc.coeff(3 * i + a, 3 * i + b);
+    double row_norm = 0.0;
+    for (int a = 0; a < 3; ++a) row_norm = std::max(row_norm, k.row(3 * i + a).norm());
+    weak[i] = {Eigen::JacobiSVD<Eigen::Matrix3d>(d).singularValues()[2] / row_norm, i};
+  }
+  std::sort(weak.begin(), weak.end());
+  std::cout << "smallest diagonal blocks (smallest singular value / row norm):\n";
+  for (int j = 0; j < 10; ++j) std::cout << "  " << describe(weak[j].second) << "\n";
 }
 
 // Disabled for the same reason as the lung_small comparison above.

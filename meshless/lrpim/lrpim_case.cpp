@@ -66,6 +66,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.node_spacing = c.meshless.node_spacing;
   p.rpim = options.rpim;
   p.alpha_q = options.alpha_q;
+  p.local_spacing = options.local_spacing;
   p.rule = options.rule;
   p.newton_tolerance = options.newton_tolerance;
   p.max_newton_iterations = options.max_newton_iterations;

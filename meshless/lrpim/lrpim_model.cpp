@@ -32,6 +32,22 @@ Eigen::Matrix<double, 6, 3> b_block(const Eigen::Vector3d& g) {
   return b;
 }
 
+// d_i per node: the constant node_spacing, or the mean distance to the 6 nearest other nodes.
+std::vector<double> node_spacings_of(const LrpimProblem& p, const NodeSearch& search) {
+  const int n = static_cast<int>(p.nodes.rows());
+  std::vector<double> d(n, p.node_spacing);
+  if (!p.local_spacing || n < 7) return d;
+#pragma omp parallel for schedule(static)
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3d x = p.nodes.row(i).transpose();
+    const std::vector<int> near = search.nearest(x, 7);
+    double sum = 0.0;
+    for (size_t k = 1; k < near.size(); ++k) sum += (p.nodes.row(near[k]).transpose() - x).norm();
+    d[i] = sum / static_cast<double>(near.size() - 1);
+  }
+  return d;
+}
+
 }  // namespace
 
 // The factorisation of the last tangent: MUMPS (row-major matrix as assembled), Eigen's SparseLU (a column-major
@@ -89,6 +105,7 @@ LrpimModel::~LrpimModel() = default;
 LrpimModel::LrpimModel(LrpimProblem problem)
     : problem_(std::move(problem)),
       search_(problem_.nodes),
+      spacing_(node_spacings_of(problem_, search_)),
       rpim_(problem_.nodes, search_, problem_.node_spacing, problem_.rpim),
       law_(problem_.material) {
   const auto t0 = Clock::now();
@@ -111,7 +128,8 @@ LrpimModel::LrpimModel(LrpimProblem problem)
     if (f == FaceCondition::elastic_support && !problem_.support_stiffness)
       throw std::invalid_argument("LrpimModel: an elastic-support face needs LrpimProblem::support_stiffness");
   }
-  const double h = problem_.node_spacing, r_q = problem_.alpha_q * h, tol = 1e-9 * h;
+  if (problem_.local_spacing) rpim_.set_node_spacing(&spacing_);
+  const double h = problem_.node_spacing, tol = 1e-9 * h;
 
   // Local sub-domains and boundaries of the nodes that carry equations (constrained nodes have u_i = u-bar).
   std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
@@ -122,6 +140,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   for (int i = 0; i < n; ++i) {
     try {
       const Eigen::Vector3d c = problem_.nodes.row(i).transpose();
+      const double r_q = problem_.alpha_q * spacing_[i];
       const LocalSurface local(body, c, r_q, tol);
       bool held = false;
       for (int t : local.touching()) held = held || condition(body.label(t)) == FaceCondition::displacement;
@@ -412,6 +431,12 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
     steps_.push_back(rec);
     if (on_step) on_step(*this, rec);
   }
+}
+
+void LrpimModel::linear_system(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r) const {
+  *k = tangent_;
+  std::vector<core::KelvinState> trial;
+  assemble(time, dt, k, r, &trial);
 }
 
 Eigen::Vector3d LrpimModel::displacement_at(const Eigen::Vector3d& x) const {

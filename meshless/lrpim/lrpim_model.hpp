@@ -76,6 +76,13 @@ class LrpimModel {
   core::Vector6 strain_at(const Eigen::Vector3d& x) const;          ///< engineering Voigt
   const RpimShapeFunctions& shape_functions() const { return rpim_; }
   const std::vector<LocalIntegrationPoint>& volume_points() const { return volume_; }
+  /// Diagnostics: the tangent and residual at the current state for a step to `time` of length dt (the system
+  /// the first Newton iteration of that step solves), without changing the model.
+  void linear_system(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r) const;
+  /// Diagnostics: sets the nodal displacements (3 #nodes) [m].
+  void set_nodal_displacements(const Eigen::VectorXd& u) { u_ = u; }
+  /// d_i per node [m]: node_spacing, or each node's own (LrpimProblem::local_spacing)
+  const std::vector<double>& node_spacings() const { return spacing_; }
 
  private:
   struct Solver;
@@ -87,6 +94,7 @@ class LrpimModel {
 
   LrpimProblem problem_;
   NodeSearch search_;
+  std::vector<double> spacing_;  ///< d_i per node
   RpimShapeFunctions rpim_;
   core::KelvinLaw law_;
   std::vector<bool> constrained_;                 ///< per node: on a displacement face

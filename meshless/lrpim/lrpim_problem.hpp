@@ -53,6 +53,12 @@ struct LrpimProblem {
   double node_spacing = 0.0;  ///< d_c [m]: scales the MQ shape parameter and r_q
   RpimParameters rpim;
   double alpha_q = 1.5;  ///< r_q = alpha_q * node_spacing, the radius of each node's local sub-domain
+  /// false: d_c = node_spacing everywhere (uniform clouds: the verification problems). true: each node's own
+  /// spacing d_i, the mean distance to its 6 nearest nodes (h on a cubic grid's interior), sets its sub-domain
+  /// r_q,i = alpha_q d_i, and d_c at a point is the mean d_i of its support (RpimShapeFunctions::set_node_spacing):
+  /// Liu & Gu define both by the local nodal spacing, which a graded cloud (the lung's, refined 2x near the load
+  /// and the support) does not have uniform (docs/LRPIM.md §5).
+  bool local_spacing = false;
   LocalQuadratureRule rule;
   /// Correct each node's test gradient by a constant so that the local divergence identity
   /// int_{Omega_s} grad v dV = int_{boundary of Omega_s in dOmega} v n dA holds for the quadrature (the linear

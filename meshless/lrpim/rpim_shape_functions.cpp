@@ -43,7 +43,13 @@ void RpimShapeFunctions::evaluate(const Eigen::Vector3d& x, bool with_gradients,
   if (!x.allFinite()) throw std::invalid_argument("RpimShapeFunctions::evaluate: non-finite point");
   out->nodes = search_->nearest(x, parameters_.num_neighbours);
   const int n = static_cast<int>(out->nodes.size());
-  const double s = spacing_, c2 = parameters_.alpha_c * parameters_.alpha_c, q = parameters_.q;
+  double s = spacing_;
+  if (node_spacing_ && !node_spacing_->empty()) {
+    s = 0.0;
+    for (int i : out->nodes) s += (*node_spacing_)[i];
+    s /= static_cast<double>(n);
+  }
+  const double c2 = parameters_.alpha_c * parameters_.alpha_c, q = parameters_.q;
   // Node coordinates relative to X in units of d_c.
   Eigen::Matrix3Xd y(3, n);
   for (int i = 0; i < n; ++i) y.col(i) = (nodes_->row(out->nodes[i]).transpose() - x) / s;

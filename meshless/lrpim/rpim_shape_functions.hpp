@@ -81,12 +81,17 @@ class RpimShapeFunctions {
 
   const RpimParameters& parameters() const { return parameters_; }
   double spacing() const { return spacing_; }
+  /// d_c per node [m] (referenced, must outlive this object; empty: the constant spacing). d_c at a point is then
+  /// the mean of its support nodes' spacings: Liu & Gu's "average nodal spacing near the point", which on a graded
+  /// cloud keeps alpha_c d_c the same multiple of the local spacing everywhere.
+  void set_node_spacing(const std::vector<double>* spacing) { node_spacing_ = spacing; }
 
  private:
   const core::PointMatrix* nodes_;
   const NodeSearch* search_;
   double spacing_;
   RpimParameters parameters_;
+  const std::vector<double>* node_spacing_ = nullptr;
 };
 
 }  // namespace meshless::lrpim
