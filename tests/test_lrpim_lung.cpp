@@ -5,6 +5,7 @@
 // the lung's linear solve fails (docs/LRPIM.md §5); --gtest_also_run_disabled_tests runs them.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
@@ -40,6 +41,8 @@ LrpimCaseOptions lung_options() {
   if (const char* a = std::getenv("LRPIM_ALPHA_Q")) options.alpha_q = std::atof(a);
   if (const char* a = std::getenv("LRPIM_NEIGHBOURS")) options.rpim.num_neighbours = std::atoi(a);
   if (const char* a = std::getenv("LRPIM_ALPHA_C")) options.rpim.alpha_c = std::atof(a);
+  if (const char* a = std::getenv("LRPIM_RULE"))  // "polar,azimuthal,radial"
+    std::sscanf(a, "%d,%d,%d", &options.rule.polar, &options.rule.azimuthal, &options.rule.radial);
   options.on_step = [](const LrpimStepReport& s) {
     std::cout << "LRPIM step " << s.step << " t = " << s.time << " s: " << s.newton_iterations << " iterations, "
               << s.factorisations << " factorisations, residual " << s.residuals.back() << ", " << s.wall_seconds
