@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -38,6 +39,7 @@ GeometrySpec read_geometry(const JsonReader& r) {
     g.load_patch_refinement = refinement->in_range("load_patch", 0.05, 1.0, true, true, g.load_patch_refinement);
     g.fixed_region_refinement =
         refinement->in_range("fixed_region", 0.05, 1.0, true, true, g.fixed_region_refinement);
+    g.load_patch_grading = refinement->in_range("load_patch_grading", 1.0, 3.0, true, true, g.load_patch_grading);
     refinement->finish();
   }
   r.finish();
@@ -265,6 +267,10 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
 }
 
 }  // namespace
+
+double GeometrySpec::load_patch_size(double size, double load_radius) const {
+  return load_patch_refinement * size * std::pow(size / load_radius, load_patch_grading - 1.0);
+}
 
 Case parse_case(const nlohmann::json& document, const std::string& file) {
   JsonReader root(file, document, "");

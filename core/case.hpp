@@ -27,6 +27,16 @@ struct GeometrySpec {
   /// along the edge of a near_point fixed region (the clamp's edge, where most of the lung's error lives).
   double load_patch_refinement = 0.5;
   double fixed_region_refinement = 0.45;
+  /// g >= 1: under the probe the FEM mesh's local size is load_patch_refinement * h * (h / r)^(g - 1), h the mesh size
+  /// being meshed and r the load radius (the node cloud keeps load_patch_refinement * its spacing: the grading serves
+  /// the reference's mesh study). g = 1 is a fixed fraction of h; g > 1 refines the load patch's edge
+  /// (a traction jump, u ~ r log r) faster than the rest as h falls, so that a mesh study reaches the order the
+  /// smoothness away from that edge allows (docs/FEM_REFERENCE.md, "Grading the load patch's edge"). Measured
+  /// against the load radius, not the case's own mesh size, so that the mesh at a given h is the same whichever
+  /// command asks for it (a sweep over /geometry/mesh_size meets the study's levels); at h = r nothing changes.
+  double load_patch_grading = 1.0;
+  /// The local size under the probe [m] when meshing at `size` [m] with a load patch of radius `load_radius` [m].
+  double load_patch_size(double size, double load_radius) const;
 };
 
 /// Where and how the body is held (docs/CONFIG.md, "/fixed_region"; docs/MATERIAL.md §3).

@@ -317,15 +317,16 @@ std::vector<double> clamp_edge_curves(const Case& c) {
 
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
 /// of a mesh study refines there too (model units, mm):
-///  * elements of load_patch_refinement * size within 1.5 r of the load centre: the patch, its edge (where the
-///    traction jumps) and the samples around it;
+///  * elements of load_patch_refinement * size within 1.5 r of the load centre (the FEM mesh: GeometrySpec::
+///    load_patch_size, graded by load_patch_grading): the patch, its edge (where the traction jumps) and the samples;
 ///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
 ///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
 ///    counts this costs).
-void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size) {
+void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh) {
   const double r = c.load.radius / 1e-3;
-  std::vector<double> fields{static_cast<double>(
-      add_ball_field(load_centre / 1e-3, 1.5 * r, r, c.geometry.load_patch_refinement * size, size))};
+  const double patch_size =
+      fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
+  std::vector<double> fields{static_cast<double>(add_ball_field(load_centre / 1e-3, 1.5 * r, r, patch_size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const std::vector<double> edge = clamp_edge_curves(c);
     if (!edge.empty()) {
@@ -351,7 +352,7 @@ void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double si
 /// (the built-in lung, or the STL's triangles as planar faces), so both get the same treatment: the regions
 /// are imprinted, the mesh is refined around them, and a cut is embedded and cracked (FEM mesh only).
 TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, const Eigen::Vector3d& load_centre,
-                  const RuledSurface* cut = nullptr) {
+                  bool fem_mesh, const RuledSurface* cut = nullptr) {
   constexpr double to_m = 1e-3;  // model units: mm
   gmsh::clear();
   const int solid = c.geometry.source == GeometrySpec::Source::builtin_lung ? add_builtin_lung()
@@ -362,7 +363,7 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const std::optional<CrackEmbedding> crack =
       cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
   // After the last fragment, so that the clamp's edge curves are the ones that get meshed.
-  refine_regions(c, load_centre, size / to_m);
+  refine_regions(c, load_centre, size / to_m, fem_mesh);
   TetMesh mesh;
   try {
     mesh = mesh_volume(size / to_m, to_m, [&] {
@@ -473,13 +474,13 @@ Geometry build_geometry(const Case& c, const GeometryOptions& options) {
 
   if (options.build_fem_mesh) {
     const double h = options.fem_mesh_size.value_or(c.geometry.mesh_size);
-    g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
+    g.fem_mesh = mesh_body(c, g.surface, h, g.load_centre, /*fem_mesh=*/true, g.cut ? &*g.cut : nullptr);  // only the FEM mesh is cracked
     tag_regions(c, g.load_centre, g.load_normal, "FEM mesh", &g.fem_mesh);
     if (g.cut) tag_crack_faces(*g.cut, &g.fem_mesh);
     order_for_locality(&g.fem_mesh);  // cells, hence the FEM's DoFs, numbered for cache use (core/mesh_ordering.hpp)
   }
   if (options.build_node_cloud) {
-    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre);
+    g.meshless_mesh = mesh_body(c, g.surface, c.meshless.node_spacing, g.load_centre, /*fem_mesh=*/false);
     tag_regions(c, g.load_centre, g.load_normal, "meshless node cloud", &g.meshless_mesh);
     order_for_locality(&g.meshless_mesh);  // the EFG assembly's cache use (core/mesh_ordering.hpp)
   }

@@ -129,6 +129,11 @@ TEST_F(BadCase, ElasticSupportWithoutStiffness) {
   expect_error(write_case(base_), {"/fixed_region/stiffness", "required key is missing"});
 }
 
+TEST_F(BadCase, LoadPatchGradingBelowOne) {
+  base_["geometry"]["refinement"] = {{"load_patch_grading", 0.5}};
+  expect_error(write_case(base_), {"/geometry/refinement/load_patch_grading", "[1, 3]", "0.5"});
+}
+
 TEST_F(BadCase, StiffnessOnAClamp) {
   base_["fixed_region"]["support"] = "clamp";
   expect_error(write_case(base_), {"/fixed_region/stiffness", "applies only to an elastic support"});

@@ -230,4 +230,16 @@ TEST(RealLobe, CutIsCrackedAndRegionsAreImprinted) {
   EXPECT_NEAR(g.fem_mesh.volume(), g.reference_volume, 1e-9 * g.reference_volume);
 }
 
+// The grading shrinks the local size under the probe faster than the mesh size: load_patch_refinement * h *
+// (h / r)^(g - 1), r the load radius, so at h = r (the shipped lung cases: 12 mm) nothing changes.
+TEST(LoadPatchGrading, RefinesFinerMeshesFasterAndLeavesTheSizeOfTheLoadRadius) {
+  core::GeometrySpec g;
+  const double r = 0.012;
+  EXPECT_DOUBLE_EQ(g.load_patch_size(0.008, r), 0.5 * 0.008);  // g = 1: a fixed fraction, as before
+  g.load_patch_grading = 2.0;
+  EXPECT_DOUBLE_EQ(g.load_patch_size(0.012, r), 0.5 * 0.012);  // h = r: unchanged
+  EXPECT_NEAR(g.load_patch_size(0.008, r), 0.5 * 0.008 * 0.008 / 0.012, 1e-15);
+  EXPECT_NEAR(g.load_patch_size(0.018, r), 0.5 * 0.018 * 1.5, 1e-15);
+}
+
 }  // namespace
