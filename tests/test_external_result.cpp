@@ -322,7 +322,7 @@ TEST_F(ExternalResult, RefusesABadName) {
   };
   EXPECT_HAS(names_refusal({{"Visibility", "v.csv"}}),
              "--external Visibility=v.csv: NAME \"Visibility\" is a built-in model's name; expected another name (the "
-             "built-in models are fem, enrichment, visibility, lrpim, zero)");
+             "built-in models are fem, enrichment, visibility, paper, lrpim, zero)");
   EXPECT_HAS(names_refusal({{"ccx", "a.csv"}, {"abaqus", "b.csv"}, {"ccx", "c.csv"}}),
              "--external ccx=c.csv: NAME \"ccx\" is given twice (also as --external ccx=a.csv)");
   EXPECT_EQ(names_refusal({{"ccx", "a.csv"}, {"abaqus", "a.csv"}}), "accepted");
