@@ -40,6 +40,9 @@ GeometrySpec read_geometry(const JsonReader& r) {
     g.fixed_region_refinement =
         refinement->in_range("fixed_region", 0.05, 1.0, true, true, g.fixed_region_refinement);
     g.load_patch_grading = refinement->in_range("load_patch_grading", 1.0, 3.0, true, true, g.load_patch_grading);
+    g.crack_front_refinement =
+        refinement->in_range("crack_front", 0.05, 1.0, true, true, g.crack_front_refinement);
+    g.crack_front_grading = refinement->in_range("crack_front_grading", 1.0, 3.0, true, true, g.crack_front_grading);
     refinement->finish();
   }
   r.finish();
@@ -270,6 +273,10 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
 
 double GeometrySpec::load_patch_size(double size, double load_radius) const {
   return load_patch_refinement * size * std::pow(size / load_radius, load_patch_grading - 1.0);
+}
+
+double GeometrySpec::crack_front_size(double size, double cut_depth) const {
+  return crack_front_refinement * size * std::pow(size / cut_depth, crack_front_grading - 1.0);
 }
 
 Case parse_case(const nlohmann::json& document, const std::string& file) {

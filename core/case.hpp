@@ -35,8 +35,17 @@ struct GeometrySpec {
   /// against the load radius, not the case's own mesh size, so that the mesh at a given h is the same whichever
   /// command asks for it (a sweep over /geometry/mesh_size meets the study's levels); at h = r nothing changes.
   double load_patch_grading = 1.0;
+  /// The crack's front (the edge of a /cut inside the body: a singular line, u ~ r^(1/2)), FEM mesh only: the local
+  /// size along it is crack_front_refinement * h * (h / d)^(g - 1), h the mesh size being meshed, d the cut's depth
+  /// and g = crack_front_grading, growing to h over one h. The defaults (1, 1) leave the front at the mesh size,
+  /// where the samples converge at order 1; g = 2 makes the front's size fall as h^2 and restores order 2
+  /// (docs/FEM_REFERENCE.md, "Grading the crack's front"). Ignored without a cut. The node cloud is not graded.
+  double crack_front_refinement = 1.0;
+  double crack_front_grading = 1.0;
   /// The local size under the probe [m] when meshing at `size` [m] with a load patch of radius `load_radius` [m].
   double load_patch_size(double size, double load_radius) const;
+  /// The local size along the crack's front [m] when meshing at `size` [m] a cut of depth `cut_depth` [m].
+  double crack_front_size(double size, double cut_depth) const;
 };
 
 /// Where and how the body is held (docs/CONFIG.md, "/fixed_region"; docs/MATERIAL.md §3).

@@ -100,7 +100,7 @@ CrackEmbedding embed_cut_in_body(const std::vector<int>& volume_tags, const Rule
     gmsh::model::getAdjacencies(1, c.second, up, down);
     bool on_outer = outer_curves.count(c.second) > 0;
     for (int s : up) on_outer = on_outer || outer_faces.count(s) > 0;
-    if (on_outer) open.push_back(c.second);
+    (on_outer ? open : e.front_curves).push_back(c.second);
   }
   if (!open.empty()) e.open_boundary_group = gmsh::model::addPhysicalGroup(1, open, kOpenBoundaryGroup);
   return e;

@@ -18,6 +18,7 @@ struct CrackEmbedding {
   int open_boundary_group = 0;  ///< dim 1: the cut's curves on the body surface (their nodes are split
                                 ///< too, so the cut opens to the outside); the crack front stays shared
   int num_surfaces = 0;
+  std::vector<int> front_curves;  ///< the cut's other boundary curves: its front inside the body (a singular line)
 };
 
 /// Fragment the body's OCC volumes (one, or several when regions were imprinted) of the current model with

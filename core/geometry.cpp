@@ -315,33 +315,44 @@ std::vector<double> clamp_edge_curves(const Case& c) {
   return curves;
 }
 
+/// A size field of `fine` within `fine` of the curves, growing linearly to `size` at `fine + size` (model units).
+int add_curve_threshold_field(const std::vector<double>& curves, double fine, double size) {
+  const int distance = gmsh::model::mesh::field::add("Distance");
+  gmsh::model::mesh::field::setNumbers(distance, "CurvesList", curves);
+  gmsh::model::mesh::field::setNumber(distance, "NumPointsPerCurve", 200);
+  const int threshold = gmsh::model::mesh::field::add("Threshold");
+  gmsh::model::mesh::field::setNumber(threshold, "InField", distance);
+  gmsh::model::mesh::field::setNumber(threshold, "SizeMin", fine);
+  gmsh::model::mesh::field::setNumber(threshold, "SizeMax", size);
+  gmsh::model::mesh::field::setNumber(threshold, "DistMin", fine);
+  gmsh::model::mesh::field::setNumber(threshold, "DistMax", fine + size);
+  return threshold;
+}
+
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
 /// of a mesh study refines there too (model units, mm):
 ///  * elements of load_patch_refinement * size within 1.5 r of the load centre (the FEM mesh: GeometrySpec::
 ///    load_patch_size, graded by load_patch_grading): the patch, its edge (where the traction jumps) and the samples;
 ///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
 ///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
-///    counts this costs).
-void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh) {
+///    counts this costs);
+///  * on a cracked FEM mesh, elements of GeometrySpec::crack_front_size along the crack's front, growing to the mesh
+///    size over one mesh size (when that size is below the mesh size).
+void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh,
+                    const CrackEmbedding* crack) {
   const double r = c.load.radius / 1e-3;
   const double patch_size =
       fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
   std::vector<double> fields{static_cast<double>(add_ball_field(load_centre / 1e-3, 1.5 * r, r, patch_size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const std::vector<double> edge = clamp_edge_curves(c);
-    if (!edge.empty()) {
-      const double fine = c.geometry.fixed_region_refinement * size;
-      const int distance = gmsh::model::mesh::field::add("Distance");
-      gmsh::model::mesh::field::setNumbers(distance, "CurvesList", edge);
-      gmsh::model::mesh::field::setNumber(distance, "NumPointsPerCurve", 200);
-      const int threshold = gmsh::model::mesh::field::add("Threshold");
-      gmsh::model::mesh::field::setNumber(threshold, "InField", distance);
-      gmsh::model::mesh::field::setNumber(threshold, "SizeMin", fine);
-      gmsh::model::mesh::field::setNumber(threshold, "SizeMax", size);
-      gmsh::model::mesh::field::setNumber(threshold, "DistMin", fine);
-      gmsh::model::mesh::field::setNumber(threshold, "DistMax", fine + size);
-      fields.push_back(threshold);
-    }
+    if (!edge.empty()) fields.push_back(add_curve_threshold_field(edge, c.geometry.fixed_region_refinement * size, size));
+  }
+  if (fem_mesh && crack && c.cut && !crack->front_curves.empty()) {
+    const double front_size = c.geometry.crack_front_size(size, c.cut->depth / 1e-3);
+    if (front_size < size)
+      fields.push_back(add_curve_threshold_field(
+          std::vector<double>(crack->front_curves.begin(), crack->front_curves.end()), front_size, size));
   }
   const int min_field = gmsh::model::mesh::field::add("Min");
   gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
@@ -363,7 +374,7 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const std::optional<CrackEmbedding> crack =
       cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
   // After the last fragment, so that the clamp's edge curves are the ones that get meshed.
-  refine_regions(c, load_centre, size / to_m, fem_mesh);
+  refine_regions(c, load_centre, size / to_m, fem_mesh, crack ? &*crack : nullptr);
   TetMesh mesh;
   try {
     mesh = mesh_volume(size / to_m, to_m, [&] {

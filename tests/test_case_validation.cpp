@@ -134,6 +134,16 @@ TEST_F(BadCase, LoadPatchGradingBelowOne) {
   expect_error(write_case(base_), {"/geometry/refinement/load_patch_grading", "[1, 3]", "0.5"});
 }
 
+TEST_F(BadCase, CrackFrontGradingAboveThree) {
+  base_["geometry"]["refinement"] = {{"crack_front", 0.5}, {"crack_front_grading", 4.0}};
+  expect_error(write_case(base_), {"/geometry/refinement/crack_front_grading", "[1, 3]", "4"});
+}
+
+TEST_F(BadCase, CrackFrontRefinementOfZero) {
+  base_["geometry"]["refinement"] = {{"crack_front", 0.0}};
+  expect_error(write_case(base_), {"/geometry/refinement/crack_front", "[0.05, 1]", "0"});
+}
+
 TEST_F(BadCase, StiffnessOnAClamp) {
   base_["fixed_region"]["support"] = "clamp";
   expect_error(write_case(base_), {"/fixed_region/stiffness", "applies only to an elastic support"});

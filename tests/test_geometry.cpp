@@ -193,6 +193,46 @@ TEST(BuiltinLung, CutBodyIsCrackedAndKeepsItsImprintedRegions) {
   EXPECT_NEAR(g.fem_mesh.volume(), g.reference_volume, 5e-3 * g.reference_volume);
 }
 
+TEST(BuiltinLung, CrackFrontIsGradedOnlyInTheFemMesh) {
+  // /geometry/refinement/crack_front f and crack_front_grading g: the edges of the tetrahedra at the crack's front
+  // have about f * h * (h / depth)^(g - 1); ungraded (f = g = 1) they have about h. Measured at h = 16 mm, depth 20 mm,
+  // f = 0.5, g = 2 (size 6.4 mm): mean edge at the front 7.8 mm graded, 15.6 mm ungraded.
+  core::Case c = core::load_case(kConfigDir + "/lung_large.json");
+  ASSERT_TRUE(c.cut.has_value());
+  core::GeometryOptions options;
+  options.build_node_cloud = false;
+  options.fem_mesh_size = 0.016;
+  auto mean_front_edge = [&](double refinement, double grading, int* cells) {
+    c.geometry.crack_front_refinement = refinement;
+    c.geometry.crack_front_grading = grading;
+    const core::Geometry g = core::build_geometry(c, options);
+    const core::TetMesh& m = g.fem_mesh;
+    *cells = m.num_tets();
+    double sum = 0.0;
+    int count = 0;
+    for (Eigen::Index t = 0; t < m.tets.rows(); ++t)
+      for (int a = 0; a < 4; ++a)
+        for (int b = a + 1; b < 4; ++b) {
+          const Eigen::Vector3d p = m.vertices.row(m.tets(t, a)), q = m.vertices.row(m.tets(t, b));
+          if (g.cut->front_distance(p) > 1e-4 && g.cut->front_distance(q) > 1e-4) continue;  // an edge at the front
+          sum += (p - q).norm();
+          ++count;
+        }
+    EXPECT_GT(count, 0);
+    return sum / std::max(count, 1);
+  };
+  int ungraded_cells = 0, graded_cells = 0;
+  const double ungraded = mean_front_edge(1.0, 1.0, &ungraded_cells);
+  const double graded = mean_front_edge(0.5, 2.0, &graded_cells);
+  const double expected = c.geometry.crack_front_size(0.016, c.cut->depth);
+  std::cout << "mean edge at the crack's front: " << graded * 1e3 << " mm graded (size " << expected * 1e3 << " mm, "
+            << graded_cells << " cells), " << ungraded * 1e3 << " mm ungraded (" << ungraded_cells << " cells)\n";
+  EXPECT_NEAR(expected, 0.0064, 1e-12);
+  EXPECT_NEAR(graded, expected, 0.3 * expected);
+  EXPECT_NEAR(ungraded, 0.016, 0.3 * 0.016);
+  EXPECT_GT(graded_cells, ungraded_cells);
+}
+
 TEST(RealLobe, TetVolumeEqualsStlEnclosedVolume) {
   const std::string stl = std::string(TISSUE_SHARED_DATA_DIR) + "/lung/lower_lobe_of_left_lung_surface.stl";
   if (!std::filesystem::exists(stl)) GTEST_SKIP() << "real lung STL not found at " << stl << " (../shared absent)";

@@ -19,8 +19,10 @@ double observed_order(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const 
 }  // namespace
 
 double expected_sample_order(const core::Case& c) {
-  const bool clamp = c.fixed_region.support == core::FixedRegionSpec::Support::clamp;
-  return clamp || c.cut ? 1.0 : 2.0;  // header
+  // header
+  if (c.fixed_region.support == core::FixedRegionSpec::Support::clamp) return 1.0;
+  if (c.cut) return std::min(c.geometry.crack_front_grading, 2.0);
+  return 2.0;
 }
 
 MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
