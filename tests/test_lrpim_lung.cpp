@@ -37,6 +37,7 @@ LrpimCaseOptions lung_options() {
   if (const char* s = std::getenv("LRPIM_SOLVER"); s && std::string(s) == "sparse_lu")
     options.linear_solver = LrpimLinearSolver::sparse_lu;
   if (std::getenv("LRPIM_NO_DIVERGENCE_CORRECTION")) options.divergence_correction = false;
+  if (const char* s = std::getenv("LRPIM_PU_TEST")) options.partition_of_unity_test = std::string(s) == "1";
   if (std::getenv("LRPIM_NODAL_SPACING")) options.local_spacing = false;
   if (const char* a = std::getenv("LRPIM_ALPHA_Q")) options.alpha_q = std::atof(a);
   if (const char* a = std::getenv("LRPIM_NEIGHBOURS")) options.rpim.num_neighbours = std::atoi(a);

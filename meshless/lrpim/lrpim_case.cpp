@@ -74,6 +74,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.linear_solver = options.linear_solver;
   p.krylov_options = options.krylov_options;
   p.divergence_correction = options.divergence_correction;
+  p.partition_of_unity_test = options.partition_of_unity_test;
   return p;
 }
 
@@ -129,6 +130,7 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                        {"boundary_order", p.rule.boundary_order},
                        {"boundary_subdivision", p.rule.boundary_subdivision}}},
                      {"divergence_correction", p.divergence_correction},
+                     {"partition_of_unity_test", p.partition_of_unity_test},
                      {"newton_tolerance", p.newton_tolerance},
                      {"refactor_contraction", p.refactor_contraction},
                      {"linear_solver", p.linear_solver == LrpimLinearSolver::mumps ? "MUMPS sparse LU (METIS)"
@@ -142,6 +144,16 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                {"traction_pa", {program.traction.x(), program.traction.y(), program.traction.z()}},
                {"total_force_n",
                 {program.traction.x() * load_area, program.traction.y() * load_area, program.traction.z() * load_area}}};
+  {
+    const LrpimGlobalBalance b = model.global_balance();
+    auto mn = [](const Eigen::Vector3d& v) { return std::vector<double>{1e3 * v.x(), 1e3 * v.y(), 1e3 * v.z()}; };
+    d["global_balance_mn"] = {{"applied_force", mn(b.applied_force)},
+                              {"support_force", mn(b.support_force)},
+                              {"applied_moment_mn_m", mn(b.applied_moment)},
+                              {"support_moment_mn_m", mn(b.support_moment)},
+                              {"test_weighted_applied", mn(b.test_weighted_applied)},
+                              {"test_weighted_support", mn(b.test_weighted_support)}};
+  }
   d["seconds"] = {{"setup", st.setup_seconds}, {"assembly", st.assembly_seconds}, {"solve", st.solve_seconds}};
   d["factorisations"] = st.factorisations;
   d["krylov_iterations"] = st.krylov_iterations;

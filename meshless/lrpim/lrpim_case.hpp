@@ -47,6 +47,7 @@ struct LrpimCaseOptions {
   double refactor_contraction = 0.2;  ///< modified Newton, as the EFG's (LrpimProblem::refactor_contraction)
   int max_newton_iterations = 25;
   bool divergence_correction = true;  ///< LrpimProblem::divergence_correction
+  bool partition_of_unity_test = false;  ///< LrpimProblem::partition_of_unity_test
   /// Called after each converged step (optional).
   std::function<void(const LrpimStepReport&)> on_step;
 };

@@ -1,5 +1,6 @@
 #include "meshless/lrpim/lrpim_model.hpp"
 
+#include <Eigen/Geometry>
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <chrono>
@@ -10,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "meshless/mls/cubic_spline_weight.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
 
@@ -131,6 +133,29 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   if (problem_.local_spacing) rpim_.set_node_spacing(&spacing_);
   const double h = problem_.node_spacing, tol = 1e-9 * h;
 
+  // Shepard-normalised test functions (LrpimProblem::partition_of_unity_test): w_i / S with S = sum_j w_j over the
+  // nodes whose sphere covers the point, grad (w_i / S) = (grad w_i - (w_i / S) grad S) / S.
+  Eigen::VectorXd radii(n);
+  for (int j = 0; j < n; ++j) radii[j] = problem_.alpha_q * spacing_[j];
+  const double max_radius = radii.maxCoeff();
+  auto normalise = [&](LocalPoint* lp, std::vector<NodeHit>* hits) {
+    search_.covering(lp->x, radii, max_radius, hits);
+    double sum = 0.0;
+    Eigen::Vector3d grad_sum = Eigen::Vector3d::Zero();
+    for (const NodeHit& hit : *hits) {
+      const double r = std::sqrt(hit.distance_sq), r_j = radii[hit.node];
+      const WeightAndSlope ws = cubic_spline_weight_with_slope(r / r_j);
+      sum += ws.w;
+      if (r > 0.0) grad_sum += ws.dw_ds / (r_j * r) * (lp->x - problem_.nodes.row(hit.node).transpose());
+    }
+    if (!(sum > 0.0)) {  // the point's own node covers it, so this only happens at its sphere's rim (v = 0)
+      lp->v = 0.0, lp->dv.setZero();
+      return;
+    }
+    lp->v /= sum;
+    lp->dv = (lp->dv - lp->v * grad_sum) / sum;
+  };
+
   // Local sub-domains and boundaries of the nodes that carry equations (constrained nodes have u_i = u-bar).
   std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
   constrained_.assign(n, false);
@@ -147,6 +172,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
       constrained_[i] = held;
       if (held) continue;
       RpimEvaluation e;
+      std::vector<NodeHit> hits;
       auto tabulate = [&](const LocalPoint& lp, const Eigen::Vector3d& normal, bool gradients) {
         LocalIntegrationPoint p;
         p.test_node = i;
@@ -164,16 +190,19 @@ LrpimModel::LrpimModel(LrpimProblem problem)
           p.phi = e.phi;
         return p;
       };
-      for (const LocalPoint& lp : sphere_points(c, r_q, local, problem_.rule))
+      for (LocalPoint& lp : sphere_points(c, r_q, local, problem_.rule)) {
+        if (problem_.partition_of_unity_test) normalise(&lp, &hits);
         if (lp.weight > 0.0 && lp.dv.squaredNorm() > 0.0) vol[i].push_back(tabulate(lp, Eigen::Vector3d::Zero(), true));
+      }
       // The boundary: every triangle within r_q. Its points feed the divergence identity (free faces too: v n is
       // there as well) and, by the triangle's condition, the reaction, support or traction integrals.
       Eigen::Vector3d boundary = Eigen::Vector3d::Zero();
       for (int t : local.triangles()) {
         const FaceCondition f = condition(body.label(t));
         const Eigen::Vector3d normal = body.normal(t);
-        for (const LocalPoint& lp : triangle_points(c, r_q, body.corner(t, 0), body.corner(t, 1), body.corner(t, 2),
-                                                    problem_.rule)) {
+        for (LocalPoint& lp : triangle_points(c, r_q, body.corner(t, 0), body.corner(t, 1), body.corner(t, 2),
+                                              problem_.rule)) {
+          if (problem_.partition_of_unity_test) normalise(&lp, &hits);
           boundary += lp.weight * lp.v * normal;
           if (f == FaceCondition::traction) {
             LocalIntegrationPoint p;
@@ -437,6 +466,39 @@ void LrpimModel::linear_system(double time, double dt, LrpimMatrix* k, Eigen::Ve
   *k = tangent_;
   std::vector<core::KelvinState> trial;
   assemble(time, dt, k, r, &trial);
+}
+
+LrpimGlobalBalance LrpimModel::global_balance() const {
+  LrpimGlobalBalance b;
+  const SurfaceBody& body = *problem_.body;
+  const double s = problem_.load_scale ? problem_.load_scale(time_) : 1.0;
+  auto condition = [this](int label) {
+    return label < static_cast<int>(problem_.conditions.size()) ? problem_.conditions[label]
+                                                                 : FaceCondition::free_surface;
+  };
+  for (int t = 0; t < body.num_triangles(); ++t) {
+    const FaceCondition f = condition(body.label(t));
+    if (f != FaceCondition::traction && f != FaceCondition::elastic_support) continue;
+    // Degree 2: the three edge midpoints, each a third of the area.
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3d x = 0.5 * (body.corner(t, k) + body.corner(t, (k + 1) % 3));
+      const double w = body.area(t) / 3.0;
+      if (f == FaceCondition::traction) {
+        const Eigen::Vector3d force = w * s * problem_.traction(x);
+        b.applied_force += force, b.applied_moment += x.cross(force);
+      } else {
+        const Eigen::Vector3d force = -w * problem_.support_stiffness(x) * displacement_at(x);
+        b.support_force += force, b.support_moment += x.cross(force);
+      }
+    }
+  }
+  for (const LocalIntegrationPoint& p : traction_) b.test_weighted_applied += p.weight * p.v * s * problem_.traction(p.x);
+  for (const LocalIntegrationPoint& p : support_) {
+    Eigen::Vector3d u = Eigen::Vector3d::Zero();
+    for (int a = 0; a < static_cast<int>(p.support.size()); ++a) u += p.phi[a] * u_.segment<3>(3 * p.support[a]);
+    b.test_weighted_support -= p.weight * p.v * p.stiffness * u;
+  }
+  return b;
 }
 
 Eigen::Vector3d LrpimModel::displacement_at(const Eigen::Vector3d& x) const {

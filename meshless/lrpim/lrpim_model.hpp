@@ -32,6 +32,18 @@ struct LocalIntegrationPoint {
 
 using LrpimMatrix = Eigen::SparseMatrix<double, Eigen::RowMajor, int>;
 
+/// The body's global balance at the current state: the net force [N] and moment about the origin [N m] of the
+/// applied traction and of the elastic support's reaction, each integrated over the whole surface (a degree-2 rule
+/// per triangle, independent of the test functions), beside the same sums as the local equations weight them
+/// (sum over all test nodes of the boundary terms, each point's v_i). A Galerkin method whose test functions sum to 1
+/// balances exactly (the internal forces cancel); MLPG's local equations need not: docs/LRPIM.md §5.
+struct LrpimGlobalBalance {
+  Eigen::Vector3d applied_force = Eigen::Vector3d::Zero(), applied_moment = Eigen::Vector3d::Zero();
+  Eigen::Vector3d support_force = Eigen::Vector3d::Zero(), support_moment = Eigen::Vector3d::Zero();
+  /// sum_i int v_i s t-bar dA and sum_i int v_i (-k_s u) dA over the local boundaries
+  Eigen::Vector3d test_weighted_applied = Eigen::Vector3d::Zero(), test_weighted_support = Eigen::Vector3d::Zero();
+};
+
 /// Per step: what Newton did.
 struct LrpimStepRecord {
   double time = 0.0;  ///< [s]
@@ -81,6 +93,8 @@ class LrpimModel {
   void linear_system(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r) const;
   /// Diagnostics: sets the nodal displacements (3 #nodes) [m].
   void set_nodal_displacements(const Eigen::VectorXd& u) { u_ = u; }
+  /// The global balance at the current state and time (LrpimGlobalBalance).
+  LrpimGlobalBalance global_balance() const;
   /// d_i per node [m]: node_spacing, or each node's own (LrpimProblem::local_spacing)
   const std::vector<double>& node_spacings() const { return spacing_; }
 
