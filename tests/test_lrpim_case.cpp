@@ -112,6 +112,40 @@ TEST(LrpimCase, ClampedBarMatchesTheClosedForm) {
   EXPECT_GT(run.details["points"]["reaction"].get<int>(), 0);
 }
 
+// The sum of all local equations against the body's balance (LrpimTestFunction, docs/LRPIM.md §5): the bar on its
+// elastic support bent by a transverse load, whose stress varies so that the clipped spheres' quadrature does not
+// integrate it exactly. With the plain spline the v_i do not sum to 1 and the support's reaction misses the load;
+// with the Shepard-normalised splines they do, and what is left is the quadrature's error.
+TEST(LrpimCase, ShepardTestFunctionsBalanceTheNetForceOfABentBar) {
+  auto imbalance = [](LrpimTestFunction test, int polar) {
+    core::Case c;
+    core::Geometry g;
+    bar_case(core::FixedRegionSpec::Support::elastic, &c, &g);
+    c.load.force = Eigen::Vector3d(0.0, 0.0, 0.1 * kStress * kSide * kSide);
+    c.material.k = 0.0;
+    c.time.steps = 1;
+    LrpimCaseOptions options;
+    options.test_function = test;
+    options.rule.polar = polar, options.rule.azimuthal = 2 * polar;
+    options.linear_solver = LrpimLinearSolver::sparse_lu;
+    const LrpimCaseRun run = run_lrpim_case(c, g, options);
+    const nlohmann::json& b = run.details["global_balance_mn"];
+    Eigen::Vector3d applied, support;
+    for (int k = 0; k < 3; ++k) applied[k] = b["applied_force"][k], support[k] = b["support_force"][k];
+    return (applied + support).norm() / applied.norm();
+  };
+  // The shipped rule (8 polar x 16 azimuthal directions) and a finer one (16 x 32): the spline's imbalance is the
+  // test functions' (it stays), the Shepard functions' is the quadrature's (it falls with the rule).
+  const double spline = imbalance(LrpimTestFunction::spline, 8), spline_fine = imbalance(LrpimTestFunction::spline, 16);
+  const double shepard = imbalance(LrpimTestFunction::shepard, 8), shepard_fine = imbalance(LrpimTestFunction::shepard, 16);
+  std::cout << "|net force of the support's reaction and the load| / |load|: spline " << spline << " (finer rule "
+            << spline_fine << "), Shepard " << shepard << " (finer rule " << shepard_fine << ")\n";
+  EXPECT_NEAR(spline, 0.0706, 0.002);
+  EXPECT_GT(spline_fine, 0.06);
+  EXPECT_NEAR(shepard, 0.0228, 0.001);
+  EXPECT_LT(shepard_fine, 0.006);  // 0.0056
+}
+
 TEST(LrpimCase, CutCaseIsRefusedWithWhatToDo) {
   core::Case c;
   core::Geometry g;

@@ -29,14 +29,6 @@ double peak_resident_bytes() {
 
 }  // namespace
 
-LocalQuadratureRule case_quadrature_rule() {
-  LocalQuadratureRule r;
-  r.polar = 4;
-  r.azimuthal = 8;
-  r.radial = 3;
-  return r;
-}
-
 LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
   if (c.cut || g.cut)
     throw core::CaseError(c.source_file, "/cut",
@@ -74,7 +66,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.linear_solver = options.linear_solver;
   p.krylov_options = options.krylov_options;
   p.divergence_correction = options.divergence_correction;
-  p.partition_of_unity_test = options.partition_of_unity_test;
+  p.test_function = options.test_function;
   return p;
 }
 
@@ -130,7 +122,9 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                        {"boundary_order", p.rule.boundary_order},
                        {"boundary_subdivision", p.rule.boundary_subdivision}}},
                      {"divergence_correction", p.divergence_correction},
-                     {"partition_of_unity_test", p.partition_of_unity_test},
+                     {"test_function", p.test_function == LrpimTestFunction::mls       ? "mls"
+                                       : p.test_function == LrpimTestFunction::shepard ? "shepard"
+                                                                                        : "spline"},
                      {"newton_tolerance", p.newton_tolerance},
                      {"refactor_contraction", p.refactor_contraction},
                      {"linear_solver", p.linear_solver == LrpimLinearSolver::mumps ? "MUMPS sparse LU (METIS)"

@@ -12,6 +12,8 @@
 #include <stdexcept>
 
 #include "meshless/mls/cubic_spline_weight.hpp"
+#include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/mls/support_radii.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
 
@@ -133,12 +135,26 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   if (problem_.local_spacing) rpim_.set_node_spacing(&spacing_);
   const double h = problem_.node_spacing, tol = 1e-9 * h;
 
-  // Shepard-normalised test functions (LrpimProblem::partition_of_unity_test): w_i / S with S = sum_j w_j over the
-  // nodes whose sphere covers the point, grad (w_i / S) = (grad w_i - (w_i / S) grad S) / S.
+  // The test functions other than the plain spline (LrpimTestFunction), from node i's spline w_i at the point
+  // (LocalPoint's v, dv): Shepard's w_i / S with S = sum_j w_j over the spheres covering the point,
+  // grad (w_i / S) = (grad w_i - (w_i / S) grad S) / S; or the MLS functions of those splines.
   Eigen::VectorXd radii(n);
   for (int j = 0; j < n; ++j) radii[j] = problem_.alpha_q * spacing_[j];
   const double max_radius = radii.maxCoeff();
-  auto normalise = [&](LocalPoint* lp, std::vector<NodeHit>* hits) {
+  const SupportRadii sphere_radii(radii);
+  const MlsShapeFunctions sphere_mls(problem_.nodes, sphere_radii, search_);
+  auto retest = [&](int i, LocalPoint* lp, std::vector<NodeHit>* hits) {
+    if (problem_.test_function == LrpimTestFunction::mls) {
+      const MlsEvaluation e = sphere_mls.evaluate(lp->x, true);
+      const auto at = std::lower_bound(e.nodes.begin(), e.nodes.end(), i);
+      if (at == e.nodes.end() || *at != i) {  // at the sphere's rim: w_i = 0
+        lp->v = 0.0, lp->dv.setZero();
+        return;
+      }
+      const int k = static_cast<int>(at - e.nodes.begin());
+      lp->v = e.phi[k], lp->dv = e.dphi.col(k);
+      return;
+    }
     search_.covering(lp->x, radii, max_radius, hits);
     double sum = 0.0;
     Eigen::Vector3d grad_sum = Eigen::Vector3d::Zero();
@@ -155,6 +171,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
     lp->v /= sum;
     lp->dv = (lp->dv - lp->v * grad_sum) / sum;
   };
+  const bool retested = problem_.test_function != LrpimTestFunction::spline;
 
   // Local sub-domains and boundaries of the nodes that carry equations (constrained nodes have u_i = u-bar).
   std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
@@ -191,7 +208,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
         return p;
       };
       for (LocalPoint& lp : sphere_points(c, r_q, local, problem_.rule)) {
-        if (problem_.partition_of_unity_test) normalise(&lp, &hits);
+        if (retested) retest(i, &lp, &hits);
         if (lp.weight > 0.0 && lp.dv.squaredNorm() > 0.0) vol[i].push_back(tabulate(lp, Eigen::Vector3d::Zero(), true));
       }
       // The boundary: every triangle within r_q. Its points feed the divergence identity (free faces too: v n is
@@ -202,7 +219,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
         const Eigen::Vector3d normal = body.normal(t);
         for (LocalPoint& lp : triangle_points(c, r_q, body.corner(t, 0), body.corner(t, 1), body.corner(t, 2),
                                               problem_.rule)) {
-          if (problem_.partition_of_unity_test) normalise(&lp, &hits);
+          if (retested) retest(i, &lp, &hits);
           boundary += lp.weight * lp.v * normal;
           if (f == FaceCondition::traction) {
             LocalIntegrationPoint p;

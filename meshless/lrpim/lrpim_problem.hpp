@@ -36,6 +36,21 @@ enum class LrpimLinearSolver {
                  ///< whose preconditioner is built once per "factorisation"; needs PETSc initialised
 };
 
+/// The test function v_i of node i's local equations; each vanishes on node i's sphere (radius r_q,i), so every
+/// choice keeps the weak form local. What differs is what the sum of all local equations is (docs/LRPIM.md §5):
+enum class LrpimTestFunction {
+  /// The cubic spline w_i(|X - X_i| / r_q,i) (Atluri's MLPG1, Liu & Gu's LRPIM). The v_i do not sum to 1, so the sum
+  /// of the local equations is not the body's balance: on the lung the internal forces carried ~20 % of the load.
+  spline,
+  /// Shepard-normalised, w_i / sum_j w_j over the spheres that cover X: the v_i sum to 1, so with exact
+  /// integration the net force balances; the net moment need not (they do not reproduce linear fields).
+  shepard,
+  /// The first-order MLS functions of the spheres' splines (meshless/mls/mls_shape_functions.hpp with radii r_q,j):
+  /// sum_i v_i = 1 and sum_i v_i X_i = X, so with exact integration the sum of the local equations tested against
+  /// any rigid motion is the body's force and moment balance, as in a Galerkin method.
+  mls,
+};
+
 struct LrpimProblem {
   std::string name = "lrpim";
   core::PointMatrix nodes;  ///< #nodes by 3 [m], inside the body or on its surface (to 1e-9 of the spacing)
@@ -66,12 +81,8 @@ struct LrpimProblem {
   /// functions, here per local domain). Without it the clipped spheres' angular quadrature error breaks the
   /// patch test at ~1e-3 (docs/LRPIM.md §4).
   bool divergence_correction = true;
-  /// Shepard-normalised test functions v_i = w_i / sum_j w_j (w_j the cubic spline of node j's sub-domain, over
-  /// every node whose sphere covers the point): they sum to 1 wherever the spheres cover the body, so the sum of all
-  /// local equations is the body's global balance (the internal forces cancel) as in a Galerkin method. With the
-  /// plain spline (false) they do not: on the lung the local equations' internal forces carried ~20 % of the load,
-  /// resisted by the elastic support as a rigid motion (docs/LRPIM.md §5). Each v_i still vanishes on its sphere.
-  bool partition_of_unity_test = false;
+  /// The test function of each node's local equations (LrpimTestFunction).
+  LrpimTestFunction test_function = LrpimTestFunction::shepard;
 
   /// Newton stops when ||R|| <= newton_tolerance * max(||external force at full load||, ||R|| at the step's start).
   double newton_tolerance = 1e-10;

@@ -288,7 +288,8 @@ nlohmann::json run_lrpim_verification(bool quick) {
   j = patch_json(cloud);
   j["bounds"] = {{"displacement", 1e-13}, {"nodal", 1e-13}, {"strain", 1e-11}, {"newton_iterations", 1}};
   item("patch_test_cloud_surface", j, round_off(cloud));
-  // Without the correction: what the angular rule leaves (1.9e-3 at 5 cells); reported, not a pass condition.
+  // Without the correction: what the angular rule leaves (5.2e-4 at 5 cells with the Shepard test functions, 1.9e-3
+  // with the plain spline); reported, not a pass condition.
   out["patch_test_uncorrected"] = patch_json(run_lrpim_patch_test(cells, 1.5, 8, 16, false, false));
 
   std::vector<double> h, l2, en;
@@ -310,9 +311,9 @@ nlohmann::json run_lrpim_verification(bool quick) {
        {{"levels", levels},
         {"rate_l2", rate_l2},
         {"rate_energy", rate_en},
-        {"bounds", {{"rate_l2", 1.2}, {"rate_energy", 1.1}}},
+        {"bounds", {{"rate_l2", 2.0}, {"rate_energy", 1.1}}},  // 2.39 and 1.20 over 2-4 cells (5.0, 1.23 over 2-3)
         {"efg_rates_for_comparison", {{"l2", 1.96}, {"energy", 1.42}}}},
-       rate_l2 > 1.2 && rate_en > 1.1);
+       rate_l2 > 2.0 && rate_en > 1.1);
 
   // The creep bar's error is the recursion's time-step error: 2.6e-5 at 40 steps of 0.1 s, 4.2e-4 at 10 steps of 0.4 s.
   const int steps = quick ? 10 : 40;
