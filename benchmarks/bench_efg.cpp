@@ -8,7 +8,11 @@
 //  * BM_EfgSolveMlGcr: the PETSc Krylov solve with the earlier default options (FGMRES, ML with GCR(20)/SOR level
 //    smoothers, built from the tangent's sparser copy), against BM_EfgSolveKrylov's SSOR by Eisenstat's trick;
 //  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
-//    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve;
+//    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve; /mumps_blr_*: MUMPS's
+//    block low-rank LU at dropping tolerances 1e-8, 1e-6 and 1e-4 (EfgOptions::direct_low_rank_tolerance), with the
+//    relative residual of its solve (the exact LU's is round-off);
+//  * BM_EfgLungRunRefreshRule/2, /5: lung_small's whole run with EfgOptions::refactor_contraction 0.2 (before) and
+//    0.5 (the default);
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::krylov_options
 //    (2k nodes), and the symmetric option (VCI off, k = 0: CG against GMRES) and a smaller support (d_max 1.5);
 //    all with PCML's own level smoother (one SSOR sweep); `ml` at 2k and 8k nodes is the earlier default;
@@ -195,20 +199,24 @@ meshless::EfgModel& assembled_lung_small() {
 }
 
 /// One factorisation (with its ordering) and one back-substitution of the lung tangent.
-void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind) {
+void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind, double low_rank_tolerance) {
   meshless::EfgModel& model = assembled_lung_small();
   meshless::EfgOptions options;
   options.linear_solver = kind;
-  double solve_seconds = 0.0;
+  options.direct_low_rank_tolerance = low_rank_tolerance;
+  double solve_seconds = 0.0, relative_residual = 0.0;
   std::string label;
+  const Eigen::VectorXd rhs = Eigen::VectorXd::Ones(model.system_matrix().rows());
   for (auto _ : state) {
     meshless::EfgLinearSolver solver(options, model.sparsity(), model.nodes(), "lung_small");
     solver.prepare(model.system_matrix());
     const auto t0 = std::chrono::steady_clock::now();
-    benchmark::DoNotOptimize(solver.solve(Eigen::VectorXd::Ones(model.system_matrix().rows())));
+    const Eigen::VectorXd x = solver.solve(rhs);
     solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    relative_residual = (model.system_matrix() * x - rhs).norm() / rhs.norm();
     label = solver.description();
   }
+  state.counters["relative_residual"] = relative_residual;
   state.counters["nodes"] = model.statistics().num_nodes;
   state.counters["nnz"] = static_cast<double>(model.statistics().matrix_nonzeros);
   state.counters["back_substitution_s"] = solve_seconds;
@@ -222,6 +230,39 @@ void BM_EfgAssemblyLung(benchmark::State& state) {
   const bool with_matrix = state.range(0) != 0;
   for (auto _ : state) model.assemble_system(with_matrix);
   add_assembly_counters(state, model);
+}
+/// configs/lung_small.json's whole EFG run (10 steps, k = 1) with the kept factors refreshed when an iteration
+/// contracts the residual by less than 1 / (range / 10) (EfgOptions::refactor_contraction = range / 10): the
+/// tangent-reuse rule, measured where it matters. Set-up excluded; assembly, solve and Newton iterations counted.
+void BM_EfgLungRunRefreshRule(benchmark::State& state) {
+  const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json");
+  core::GeometryOptions geometry_options;
+  geometry_options.build_fem_mesh = false;
+  const core::Geometry g = core::build_geometry(c, geometry_options);
+  meshless::EfgOptions options;
+  options.refactor_contraction = static_cast<double>(state.range(0)) / 10.0;
+  meshless::EfgTimings timings;
+  int newton = 0, factorisations = 0;
+  double peak = 0.0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    meshless::EfgModel model(meshless::problem_from_case(c, g), options);
+    model.setup_system();
+    state.ResumeTiming();
+    newton = factorisations = 0;
+    for (int step = 1; step <= static_cast<int>(model.problem().step_times.size()); ++step) {
+      const meshless::StepRecord r = model.solve_step(step);
+      newton += r.newton_iterations;
+      factorisations += r.factorisations;
+    }
+    timings = model.timings();
+    peak = model.nodal_displacements().rowwise().norm().maxCoeff();
+  }
+  state.counters["assembly_s"] = timings.assembly_seconds;
+  state.counters["solve_s"] = timings.solve_seconds;
+  state.counters["newton_iterations"] = newton;
+  state.counters["factorisations"] = factorisations;
+  state.counters["max_nodal_u_mm"] = 1e3 * peak;
 }
 void BM_EfgSolveJacobiBicgstab(benchmark::State& state) { time_solve(state, {LinearSolverKind::jacobi_bicgstab}); }
 
@@ -265,9 +306,13 @@ BENCHMARK(BM_EfgSolveKrylov)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond
 BENCHMARK(BM_EfgSolveMlGcr)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveMumps)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct)->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_EfgDirectLung, umfpack, LinearSolverKind::direct_umfpack)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct, 0.0)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-8, LinearSolverKind::direct, 1e-8)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-6, LinearSolverKind::direct, 1e-6)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-4, LinearSolverKind::direct, 1e-4)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, umfpack, LinearSolverKind::direct_umfpack, 0.0)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgAssemblyLung)->Arg(1)->Arg(0)->Unit(benchmark::kSecond)->Iterations(3);
+BENCHMARK(BM_EfgLungRunRefreshRule)->Arg(2)->Arg(5)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveJacobiBicgstab)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)->Iterations(1);
 
 // The preconditioner survey on the 2k-node cloud (right-preconditioned GMRES(200) unless stated).

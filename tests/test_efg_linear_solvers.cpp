@@ -147,6 +147,33 @@ TEST(EfgLinearSolvers, GmresOnEarlierFactorsReachesTheSameEquilibriumWithFewerFa
   EXPECT_LT(difference, 1e-10);
 }
 
+TEST(EfgLinearSolvers, KeptFactorsGiveWayWhenTheirRateCannotReachTheToleranceInTime) {
+  // k = 2: the kept factors of the first tangent contract the residual slowly. With a refresh rule that never
+  // fires on the rate alone (0.99) and an iteration limit of 8, only the projection (iterations left at the
+  // observed rate) can refresh the tangent in time. Measured: the first step's kept factors contract by 0.14, so 9.4
+  // iterations would be needed; with the projection Newton refreshes and every step converges in 3.
+  EfgOptions options;
+  options.linear_solver = LinearSolverKind::direct;
+  options.refactor_contraction = 0.99;
+  options.max_newton_iterations = 8;
+  EfgProblem problem = sheared_box_problem(6);
+  problem.material.k = 2.0;
+  problem.step_times = {0.0, 0.1, 0.2};
+  EfgModel model(std::move(problem), options);
+  model.setup_system();
+  int refresh_work = 0;  // factorisations and GMRES iterations on earlier factors
+  for (int s = 1; s <= 3; ++s) {
+    const StepRecord r = model.solve_step(s);
+    EXPECT_EQ(r.cutbacks, 0) << "step " << s;
+    EXPECT_LE(r.residuals.back(), 1e-8) << "step " << s;
+    std::cout << "step " << s << ", ||R|| / ||F||:";
+    for (double x : r.residuals) std::cout << " " << x;
+    std::cout << "\n";
+    refresh_work += r.linear_iterations + r.factorisations;
+  }
+  EXPECT_GT(refresh_work, 1);  // more than the first factorisation: a refreshed tangent was solved
+}
+
 TEST(PetscKrylovSolver, TheOptionsStringReachesTheMultigridLevels) {
   // PETSc creates the level smoothers inside the preconditioner and reads their options ("-mg_levels_...")
   // from its default database: the solver's own options string must reach them too.

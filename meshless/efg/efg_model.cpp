@@ -759,6 +759,13 @@ StepRecord EfgModel::solve_step(int step) {
   return rec;
 }
 
+bool EfgModel::kept_factors_too_slow(double contraction, double residual_over_target, int iteration) const {
+  if (contraction > options_.refactor_contraction || contraction >= 1.0) return true;
+  // At this contraction the residual reaches the target after log(target / r) / log(contraction) more iterations.
+  const double iterations_left = std::log(residual_over_target) / -std::log(contraction);
+  return iteration + iterations_left > options_.max_newton_iterations;
+}
+
 core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord* rec) {
   core::NewtonAttempt attempt;
   attempt.t_start = t_from;
@@ -771,8 +778,9 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
 
   // Newton with tangent reuse. A factorisation costs seconds (dense EFG rows), a back-substitution a
   // fraction of that, so the last factorised consistent tangent is kept while it still contracts the
-  // residual fast (ratio <= options_.refactor_contraction), and refreshed when it does not or when dt
-  // changed. With k = 0 the tangent depends on dt only (eq. 13: E_k = factor(dt) C0) and is exact.
+  // residual (ratio <= options_.refactor_contraction) fast enough to reach the tolerance within the iteration
+  // limit, and refreshed when it does not or when dt changed. With k = 0 the tangent depends on dt only
+  // (eq. 13: E_k = factor(dt) C0) and is exact.
   const bool constant_tangent = problem_.material.k == 0.0;
   const core::DivergenceTest diverging;
   // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
@@ -799,9 +807,10 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
     attempt.residuals.push_back(r / reference);
     attempt.failure = diverging(attempt.residuals);
     if (!attempt.converged()) break;
-    refresh = !constant_tangent && reuse && r > options_.refactor_contraction * previous;
+    const double target = options_.newton_tolerance * reference;
+    refresh = !constant_tangent && reuse && r > target && kept_factors_too_slow(r / previous, r / target, it);
     previous = r;
-    if (r <= options_.newton_tolerance * reference) break;
+    if (r <= target) break;
     if (it >= options_.max_newton_iterations) {
       attempt.failure = "the iteration limit (max_newton_iterations) was reached";
       break;

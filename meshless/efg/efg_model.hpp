@@ -185,6 +185,10 @@ class EfgModel {
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
   /// restores the parameters U when it fails (the attempt callback of core::advance_with_cutback).
   core::NewtonAttempt newton_step(double t_from, double t_to, StepRecord* record);
+  /// Whether the kept factors must give way to the current tangent: they contracted the residual by
+  /// `contraction` in the last iteration, which is more than EfgOptions::refactor_contraction allows, or too
+  /// little to take ||R|| (now `residual_over_target` times Newton's target) there by max_newton_iterations.
+  bool kept_factors_too_slow(double contraction, double residual_over_target, int iteration) const;
   /// Build the weight modifier of `cut` (null: none) and install it into the MLS shape functions.
   void install_cut(const core::RuledSurface* cut);
   /// Volume points, and boundary points (outer faces and the lips of the cut), for the current problem.

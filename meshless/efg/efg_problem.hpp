@@ -41,14 +41,21 @@ inline constexpr const char* kMlWithGcrSmoothersOptions =
 struct EfgOptions {
   double newton_tolerance = 1e-8;  ///< ||R|| <= tol * ||external force|| (eq. 24 residual)
   int max_newton_iterations = 25;
-  /// Keep the factorised tangent while each iteration reduces ||R|| by at least this ratio; refactorise
-  /// otherwise (k != 0). 0 gives full Newton (a fresh tangent every iteration).
-  double refactor_contraction = 0.2;
+  /// Keep the factorised tangent while each iteration reduces ||R|| by at least this ratio and that rate reaches
+  /// newton_tolerance within max_newton_iterations; refresh the tangent otherwise (k != 0). 0 gives full Newton
+  /// (a fresh tangent every iteration). 0.5: an iteration on the kept factors costs a residual and a
+  /// back-substitution, a refresh the whole tangent and a GMRES solve, about 8x as much on the lung
+  /// (docs/MESHLESS.md §2, "Tangent reuse": 0.2 before, 16 % slower on lung_small).
+  double refactor_contraction = 0.5;
   /// When the kept factors stop contracting (above), the new tangent is first solved by GMRES preconditioned
   /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many
   /// iterations to reach iterative_tolerance. Direct solvers only; 0 always factorises. docs/MESHLESS.md §2.
   int earlier_factors_max_iterations = 30;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
+  /// > 0: the direct solver (MUMPS) factorises with block low-rank compression at this dropping tolerance
+  /// (meshless/solvers/mumps_lu.hpp): an approximate LU that Newton's own test corrects, as it does the kept
+  /// factors of an older tangent. 0: the exact LU. docs/MESHLESS.md §2, "Low-rank factors".
+  double direct_low_rank_tolerance = 0.0;
   /// automatic: factorise when the estimated peak memory of the LU (meshless/solvers/direct_solver_estimate.hpp, AMD on
   /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
   /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.

@@ -42,7 +42,7 @@ struct LrpimCaseOptions {
   LrpimLinearSolver linear_solver = LrpimLinearSolver::mumps;
   std::string krylov_options = LrpimProblem{}.krylov_options;  ///< petsc_krylov only
   double newton_tolerance = 1e-8;     ///< as the EFG's EfgOptions::newton_tolerance
-  double refactor_contraction = 0.2;  ///< modified Newton, as the EFG's (LrpimProblem::refactor_contraction)
+  double refactor_contraction = 0.2;  ///< modified Newton by the EFG's rule (LrpimProblem::refactor_contraction)
   int max_newton_iterations = 25;
   bool divergence_correction = true;  ///< LrpimProblem::divergence_correction
   LrpimTestFunction test_function = LrpimTestFunction::shepard;  ///< LrpimProblem::test_function

@@ -8,9 +8,11 @@
 #include <exception>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
+#include "meshless/efg/gauss_quadrature_tet.hpp"
 #include "meshless/mls/cubic_spline_weight.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/support_radii.hpp"
@@ -120,10 +122,6 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   if (problem_.step_times.empty()) throw std::invalid_argument("LrpimModel: no step times");
   if (!problem_.body) throw std::invalid_argument("LrpimModel: LrpimProblem::body is not set");
   const SurfaceBody& body = *problem_.body;
-  auto condition = [this](int label) {
-    return label < static_cast<int>(problem_.conditions.size()) ? problem_.conditions[label]
-                                                                 : FaceCondition::free_surface;
-  };
   for (FaceCondition f : problem_.conditions) {
     if (f == FaceCondition::traction && !problem_.traction)
       throw std::invalid_argument("LrpimModel: a traction face needs LrpimProblem::traction");
@@ -142,10 +140,12 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   for (int j = 0; j < n; ++j) radii[j] = problem_.alpha_q * spacing_[j];
   const double max_radius = radii.maxCoeff();
   const SupportRadii sphere_radii(radii);
-  const MlsShapeFunctions sphere_mls(problem_.nodes, sphere_radii, search_);
+  // Built only for the MLS test functions: the others never evaluate it.
+  std::optional<MlsShapeFunctions> sphere_mls;
+  if (problem_.test_function == LrpimTestFunction::mls) sphere_mls.emplace(problem_.nodes, sphere_radii, search_);
   auto retest = [&](int i, LocalPoint* lp, std::vector<NodeHit>* hits) {
     if (problem_.test_function == LrpimTestFunction::mls) {
-      const MlsEvaluation e = sphere_mls.evaluate(lp->x, true);
+      const MlsEvaluation e = sphere_mls->evaluate(lp->x, true);
       const auto at = std::lower_bound(e.nodes.begin(), e.nodes.end(), i);
       if (at == e.nodes.end() || *at != i) {  // at the sphere's rim: w_i = 0
         lp->v = 0.0, lp->dv.setZero();
@@ -489,17 +489,15 @@ LrpimGlobalBalance LrpimModel::global_balance() const {
   LrpimGlobalBalance b;
   const SurfaceBody& body = *problem_.body;
   const double s = problem_.load_scale ? problem_.load_scale(time_) : 1.0;
-  auto condition = [this](int label) {
-    return label < static_cast<int>(problem_.conditions.size()) ? problem_.conditions[label]
-                                                                 : FaceCondition::free_surface;
-  };
+  // Degree 2, independent of the test functions' spheres (LrpimGlobalBalance).
+  const SimplexRule rule = triangle_rule(2);
   for (int t = 0; t < body.num_triangles(); ++t) {
     const FaceCondition f = condition(body.label(t));
     if (f != FaceCondition::traction && f != FaceCondition::elastic_support) continue;
-    // Degree 2: the three edge midpoints, each a third of the area.
-    for (int k = 0; k < 3; ++k) {
-      const Eigen::Vector3d x = 0.5 * (body.corner(t, k) + body.corner(t, (k + 1) % 3));
-      const double w = body.area(t) / 3.0;
+    const Eigen::Vector3d a = body.corner(t, 0), e1 = body.corner(t, 1) - a, e2 = body.corner(t, 2) - a;
+    for (int q = 0; q < rule.size(); ++q) {
+      const Eigen::Vector3d x = a + rule.points[q].x() * e1 + rule.points[q].y() * e2;
+      const double w = 2.0 * body.area(t) * rule.weights[q];  // the reference triangle's area is 1/2
       if (f == FaceCondition::traction) {
         const Eigen::Vector3d force = w * s * problem_.traction(x);
         b.applied_force += force, b.applied_moment += x.cross(force);

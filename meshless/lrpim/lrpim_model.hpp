@@ -105,6 +105,11 @@ class LrpimModel {
   void assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r,
                 std::vector<core::KelvinState>* new_states) const;
   void build_pattern();
+  /// The condition of the faces labelled `label` (LrpimProblem::conditions; a label past its end is free).
+  FaceCondition condition(int label) const {
+    return label < static_cast<int>(problem_.conditions.size()) ? problem_.conditions[label]
+                                                                 : FaceCondition::free_surface;
+  }
 
   LrpimProblem problem_;
   NodeSearch search_;

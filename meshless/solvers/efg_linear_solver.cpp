@@ -55,7 +55,9 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
                 : LinearSolverKind::petsc_krylov;
   }
   switch (kind_) {
-    case LinearSolverKind::direct: mumps_ = std::make_unique<MumpsLu>(name_); break;
+    case LinearSolverKind::direct:
+      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance);
+      break;
     case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
     case LinearSolverKind::petsc_krylov:
       if (!petsc_initialised())
@@ -86,7 +88,11 @@ std::pair<int, int> EfgLinearSolver::nodes_read(int num_nodes) const {
 
 std::string EfgLinearSolver::description() const {
   switch (kind_) {
-    case LinearSolverKind::direct: return "MUMPS sparse LU (METIS ordering)";
+    case LinearSolverKind::direct:
+      return options_.direct_low_rank_tolerance > 0.0
+                 ? fmt::format("MUMPS block low-rank LU (METIS ordering, tolerance {:g})",
+                               options_.direct_low_rank_tolerance)
+                 : std::string("MUMPS sparse LU (METIS ordering)");
     case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
     case LinearSolverKind::petsc_krylov: return krylov_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";

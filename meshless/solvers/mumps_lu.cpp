@@ -17,6 +17,7 @@ namespace {
 // holds them 0-based.
 MUMPS_INT& icntl(DMUMPS_STRUC_C& id, int i) { return id.icntl[i - 1]; }
 MUMPS_INT infog(const DMUMPS_STRUC_C& id, int i) { return id.infog[i - 1]; }
+double& cntl(DMUMPS_STRUC_C& id, int i) { return id.cntl[i - 1]; }
 
 constexpr MUMPS_INT kJobInit = -1, kJobEnd = -2, kJobAnalyse = 1, kJobFactorise = 2, kJobSolve = 3;
 constexpr MUMPS_INT kOrderingMetis = 5;  // ICNTL(7)
@@ -76,7 +77,11 @@ struct MumpsLu::Mumps {
   }
 };
 
-MumpsLu::MumpsLu(std::string name) : mumps_(std::make_unique<Mumps>()), name_(std::move(name)) {
+MumpsLu::MumpsLu(std::string name, double low_rank_tolerance)
+    : mumps_(std::make_unique<Mumps>()), name_(std::move(name)) {
+  if (!(low_rank_tolerance >= 0.0))
+    throw std::invalid_argument(
+        fmt::format("MumpsLu '{}': the low-rank tolerance must be >= 0 (0: exact LU), got {}", name_, low_rank_tolerance));
   int mpi_initialised = 0, mpi_finalized = 0;
   MPI_Initialized(&mpi_initialised);
   MPI_Finalized(&mpi_finalized);
@@ -102,6 +107,10 @@ MumpsLu::MumpsLu(std::string name) : mumps_(std::make_unique<Mumps>()), name_(st
   // Null-pivot detection: without it MUMPS factorises a singular matrix without a word (a body without enough
   // clamped surface, a node that no point supports). A pivot is null below 1e-5 eps ||A|| (CNTL(3) = 0).
   icntl(id, 24) = 1;
+  if (low_rank_tolerance > 0.0) {
+    icntl(id, 35) = 2;  // BLR in the factorisation and the solve (MUMPS 5.5 user guide, ICNTL(35))
+    cntl(id, 7) = low_rank_tolerance;
+  }
 }
 
 MumpsLu::~MumpsLu() = default;

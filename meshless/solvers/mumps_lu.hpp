@@ -23,8 +23,12 @@ namespace meshless {
 
 class MumpsLu {
  public:
-  /// `name` labels error messages (the problem). Throws std::logic_error when MPI is not initialised.
-  explicit MumpsLu(std::string name);
+  /// `name` labels error messages (the problem). `low_rank_tolerance` > 0 turns on MUMPS's block low-rank (BLR)
+  /// factorisation (ICNTL(35) = 2) with this dropping parameter (CNTL(7), applied to the scaled matrix): the off-
+  /// diagonal blocks of each front are compressed to that accuracy, so the factors are approximate and solve() is
+  /// accurate to about this tolerance times the condition number. 0 (the default) is the exact LU. Throws
+  /// std::logic_error when MPI is not initialised, std::invalid_argument for a negative tolerance.
+  explicit MumpsLu(std::string name, double low_rank_tolerance = 0.0);
   ~MumpsLu();
   MumpsLu(const MumpsLu&) = delete;
   MumpsLu& operator=(const MumpsLu&) = delete;
