@@ -13,8 +13,7 @@ namespace {
 
 TEST(EfgLung, SmallCaseRunsAndConverges) {
   core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
-  // Two steps (ramp to full load at t = 1 s) keep the smoke run short: each full-Newton step factorises the
-  // tangent 3-4 times.
+  // Two steps (ramp to full load at t = 1 s) keep the smoke run short.
   c.time.total = 1.0;
   c.time.steps = 2;
   core::GeometryOptions options;
@@ -29,7 +28,9 @@ TEST(EfgLung, SmallCaseRunsAndConverges) {
   for (const StepRecord& s : model.steps()) {
     EXPECT_LE(s.residuals.back(), model.options().newton_tolerance) << "step " << s.step;
     EXPECT_GE(s.newton_iterations, 1);
-    EXPECT_LE(s.newton_iterations, 10) << "step " << s.step;
+    // Measured 8 and 11: the kept factors of the first tangent contract the residual by 0.13-0.26 per iteration,
+    // above the 0.5 that would refresh them (EfgOptions::refactor_contraction).
+    EXPECT_LE(s.newton_iterations, 12) << "step " << s.step;
     std::cout << "step " << s.step << " t = " << s.time << ": " << s.newton_iterations << " Newton iterations, residuals";
     for (double r : s.residuals) std::cout << " " << r;
     std::cout << "\n";

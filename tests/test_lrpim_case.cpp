@@ -140,10 +140,11 @@ TEST(LrpimCase, ShepardTestFunctionsBalanceTheNetForceOfABentBar) {
   const double shepard = imbalance(LrpimTestFunction::shepard, 8), shepard_fine = imbalance(LrpimTestFunction::shepard, 16);
   std::cout << "|net force of the support's reaction and the load| / |load|: spline " << spline << " (finer rule "
             << spline_fine << "), Shepard " << shepard << " (finer rule " << shepard_fine << ")\n";
-  EXPECT_NEAR(spline, 0.0706, 0.002);
-  EXPECT_GT(spline_fine, 0.06);
-  EXPECT_NEAR(shepard, 0.0228, 0.001);
-  EXPECT_LT(shepard_fine, 0.006);  // 0.0056
+  // Measured: 0.0699, 0.0837, 0.0245, 0.00577.
+  EXPECT_NEAR(spline, 0.0699, 0.002);
+  EXPECT_GT(spline_fine, 0.075);
+  EXPECT_NEAR(shepard, 0.0245, 0.001);
+  EXPECT_LT(shepard_fine, 0.0062);
 }
 
 TEST(LrpimCase, CutCaseIsRefusedWithWhatToDo) {

@@ -489,8 +489,10 @@ LrpimGlobalBalance LrpimModel::global_balance() const {
   LrpimGlobalBalance b;
   const SurfaceBody& body = *problem_.body;
   const double s = problem_.load_scale ? problem_.load_scale(time_) : 1.0;
-  // Degree 2, independent of the test functions' spheres (LrpimGlobalBalance).
-  const SimplexRule rule = triangle_rule(2);
+  // Independent of the test functions' spheres (LrpimGlobalBalance). The reaction -k_s u_h is not a polynomial:
+  // on the CI lung a degree-2 rule read the imbalance as 1.50 % (force) and 3.30 % (moment), the edge midpoints
+  // as 0.97 % and 2.5 %; degrees 4 and 6 agree to 0.05 % (1.27 / 1.30 % and 2.98 / 3.02 %).
+  const SimplexRule rule = triangle_rule(6);
   for (int t = 0; t < body.num_triangles(); ++t) {
     const FaceCondition f = condition(body.label(t));
     if (f != FaceCondition::traction && f != FaceCondition::elastic_support) continue;
