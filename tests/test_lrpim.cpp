@@ -12,6 +12,7 @@
 
 #include "meshless/lrpim/box_body.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
+#include "meshless/lrpim/lrpim_model.hpp"
 #include "meshless/lrpim/surface_body.hpp"
 #include "meshless/verification/box_mesh.hpp"
 #include "meshless/lrpim/lrpim_verification.hpp"
@@ -277,6 +278,27 @@ TEST(Lrpim, CantileverConvergesTowardsTimoshenko) {
   // Fitted 2.39 (L2) and 1.20 (energy), against the EFG's 1.96 and 1.42; the L2 error is smallest at 3 cells.
   EXPECT_GT(rate_l2, 2.2);
   EXPECT_GT(rate_en, 1.1);
+}
+
+// A free node with no sub-domain inside the body would carry an empty row, which the factorisation reports only as a
+// "zero column" of its permuted matrix (how a lost clamp mark showed in CI, when the set-up kept its per-node flags
+// as bits that two threads could overwrite). The set-up names the node instead.
+TEST(Lrpim, NodeWithoutEquationsIsNamedAtSetUp) {
+  LrpimProblem p = lrpim_cantilever_problem(2);
+  const Eigen::Index n = p.nodes.rows();
+  p.nodes.conservativeResize(n + 1, 3);
+  p.nodes.row(n) << 0.3, 0.0, 0.0;  // 200 mm beyond the x = L end: its 15 mm sphere misses the beam
+  try {
+    const LrpimModel model(std::move(p));
+    FAIL() << "a node outside the body must be refused";
+  } catch (const std::runtime_error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("node " + std::to_string(n) + " at (300, 0, 0) mm"), std::string::npos) << m;
+    EXPECT_NE(m.find("carries no equations"), std::string::npos) << m;
+    EXPECT_NE(m.find("Remove the node or mend the surface"), std::string::npos) << m;
+  }
+  // The same beam without the stray node sets up, with its 9 nodes at x = 0 held.
+  EXPECT_EQ(LrpimModel(lrpim_cantilever_problem(2)).statistics().num_constrained_nodes, 9);
 }
 
 TEST(Lrpim, CreepBarFollowsTheClosedFormAtKZero) {

@@ -175,7 +175,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
 
   // Local sub-domains and boundaries of the nodes that carry equations (constrained nodes have u_i = u-bar).
   std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
-  constrained_.assign(n, false);
+  constrained_.assign(n, 0);
   double min_rcond = 1.0, defect = 0.0;
   std::exception_ptr error;  // the first, rethrown as it is (SingularRpimMatrix keeps its data)
 #pragma omp parallel for schedule(dynamic, 4) reduction(min : min_rcond) reduction(max : defect)
@@ -186,7 +186,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
       const LocalSurface local(body, c, r_q, tol);
       bool held = false;
       for (int t : local.touching()) held = held || condition(body.label(t)) == FaceCondition::displacement;
-      constrained_[i] = held;
+      constrained_[i] = held ? 1 : 0;
       if (held) continue;
       RpimEvaluation e;
       std::vector<NodeHit> hits;
@@ -256,6 +256,17 @@ LrpimModel::LrpimModel(LrpimProblem problem)
     }
   }
   if (error) std::rethrow_exception(error);
+  // A free node whose sub-domain has no point inside the body would carry an empty row: name it here rather than
+  // let the factorisation report a "zero column" of a permuted matrix.
+  for (int i = 0; i < n; ++i)
+    if (!constrained_[i] && vol[i].empty()) {
+      std::ostringstream m;
+      m << "LrpimModel '" << problem_.name << "': node " << i << " at (" << 1e3 * problem_.nodes(i, 0) << ", "
+        << 1e3 * problem_.nodes(i, 1) << ", " << 1e3 * problem_.nodes(i, 2) << ") mm has no point of its local sub-domain (radius " << 1e3 * problem_.alpha_q * spacing_[i]
+        << " mm) inside the body, so it carries no equations; the node lies outside the surface or the surface is "
+           "not closed there. Remove the node or mend the surface";
+      throw std::runtime_error(m.str());
+    }
   auto gather = [n](std::vector<std::vector<LocalIntegrationPoint>>& per_node, std::vector<LocalIntegrationPoint>* all,
                     std::vector<int>* begin) {
     begin->assign(n + 1, 0);
@@ -279,7 +290,7 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   constraint_scale_ = problem_.material.K1 * h;
   build_pattern();
   statistics_.num_nodes = n;
-  for (bool b : constrained_) statistics_.num_constrained_nodes += b;
+  for (std::uint8_t b : constrained_) statistics_.num_constrained_nodes += b;
   statistics_.num_volume_points = static_cast<int>(volume_.size());
   statistics_.num_reaction_points = static_cast<int>(reaction_.size());
   statistics_.num_support_points = static_cast<int>(support_.size());

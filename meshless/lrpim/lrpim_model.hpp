@@ -7,6 +7,7 @@
 #include <Eigen/SparseCore>
 #include <functional>
 #include <memory>
+#include <cstdint>
 #include <vector>
 
 #include "core/kelvin_law.hpp"
@@ -82,7 +83,7 @@ class LrpimModel {
   const std::vector<LrpimStepRecord>& steps() const { return steps_; }
   /// 3 #nodes: the nodal displacements (RPIM interpolates, so these are u(X_i)) [m]
   const Eigen::VectorXd& nodal_displacements() const { return u_; }
-  const std::vector<bool>& constrained() const { return constrained_; }
+  bool constrained(int node) const { return constrained_[node] != 0; }  ///< on a displacement face
 
   Eigen::Vector3d displacement_at(const Eigen::Vector3d& x) const;  ///< [m]
   core::Vector6 strain_at(const Eigen::Vector3d& x) const;          ///< engineering Voigt
@@ -116,7 +117,9 @@ class LrpimModel {
   std::vector<double> spacing_;  ///< d_i per node
   RpimShapeFunctions rpim_;
   core::KelvinLaw law_;
-  std::vector<bool> constrained_;                 ///< per node: on a displacement face
+  /// per node: 1 on a displacement face. Bytes, not std::vector<bool>: the set-up writes it from many threads, and
+  /// packed bits made neighbouring nodes' writes race (a lost mark left a clamped node with no equations).
+  std::vector<std::uint8_t> constrained_;
   // Points node by node: node i's points of each kind are [begin[i], begin[i + 1]).
   std::vector<LocalIntegrationPoint> volume_;     ///< local sub-domains
   std::vector<LocalIntegrationPoint> reaction_;   ///< local boundaries on displacement faces

@@ -146,8 +146,18 @@ LrpimPatchReport run_lrpim_patch_test(int cells, double alpha_q, int polar, int 
   return r;
 }
 
-LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, double alpha_q) {
-  const double L = 0.1, D = 0.02, T = 0.02, P = 1e-3;
+namespace {
+constexpr double kCantileverLength = 0.1, kCantileverDepth = 0.02, kCantileverThickness = 0.02, kCantileverShear = 1e-3;
+
+// Clamped at x = 0 to the exact displacement, shear P at x = L (exact 3-D elasticity for nu = 0).
+core::TimoshenkoCantilever cantilever_solution(const core::KelvinParameters& m) {
+  const double D = kCantileverDepth, T = kCantileverThickness;
+  return core::TimoshenkoCantilever{kCantileverShear, m.K1, m.nu, kCantileverLength, D, T * D * D * D / 12.0};
+}
+}  // namespace
+
+LrpimProblem lrpim_cantilever_problem(int nd, const RpimParameters& rpim, double alpha_q) {
+  const double L = kCantileverLength, D = kCantileverDepth, T = kCantileverThickness;
   const double h = D / nd;
   LrpimProblem p;
   p.name = "lrpim cantilever";
@@ -159,15 +169,21 @@ LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, d
   p.node_spacing = h;
   p.rpim = rpim;
   p.alpha_q = alpha_q;
-  const double E = p.material.K1;
-  // Clamped at x = 0 to the exact displacement, shear P at x = L (exact 3-D elasticity for nu = 0).
-  const core::TimoshenkoCantilever exact{P, E, p.material.nu, L, D, T * D * D * D / 12.0};
+  const core::TimoshenkoCantilever exact = cantilever_solution(p.material);
+  p.prescribed_displacement = [exact](const Eigen::Vector3d& x) { return exact.displacement(x); };
+  p.traction = [exact](const Eigen::Vector3d& x) { return exact.end_traction(x); };
+  return p;
+}
+
+LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, double alpha_q) {
+  const double L = kCantileverLength, D = kCantileverDepth, T = kCantileverThickness;
+  const double h = D / nd;
+  LrpimProblem p = lrpim_cantilever_problem(nd, rpim, alpha_q);
+  const core::TimoshenkoCantilever exact = cantilever_solution(p.material);
   auto exact_u = [exact](const Eigen::Vector3d& x) { return exact.displacement(x); };
   auto exact_strain = [exact](const Eigen::Vector3d& x) { return exact.strain(x); };
-  p.prescribed_displacement = exact_u;
-  p.traction = [exact](const Eigen::Vector3d& x) { return exact.end_traction(x); };
   const core::KelvinLaw law(p.material);
-  const core::Matrix6 C = law.elastic_matrix(E);
+  const core::Matrix6 C = law.elastic_matrix(p.material.K1);
   LrpimModel model(std::move(p));
   model.run();
   LrpimCantileverReport r;

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "meshless/lrpim/lrpim_problem.hpp"
 #include "meshless/lrpim/rpim_shape_functions.hpp"
 
 namespace meshless::lrpim {
@@ -51,6 +52,9 @@ struct LrpimCantileverReport {
 /// The EFG's cantilever (L 100 mm, D = T = 20 mm, K1 = 6000 Pa, nu = 0, shear P = 1 mN at x = L, parabolic):
 /// the exact Timoshenko & Goodier displacement prescribed at the x = 0 nodes, the exact parabolic traction at
 /// x = L, the other faces free; 5 nd by nd by nd cells of the box mesh's node grid (regular, no jitter).
+LrpimProblem lrpim_cantilever_problem(int cells_through_height, const RpimParameters& rpim = {}, double alpha_q = 1.5);
+
+/// The cantilever above, solved, with its errors against the closed form.
 LrpimCantileverReport run_lrpim_cantilever(int cells_through_height, const RpimParameters& rpim = {},
                                            double alpha_q = 1.5);
 
