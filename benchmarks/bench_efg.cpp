@@ -179,8 +179,19 @@ void BM_EfgSolveMlGcr(benchmark::State& state) {
 void BM_EfgSolveMumps(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct}); }
 void BM_EfgSolveUmfpack(benchmark::State& state) { time_solve(state, {LinearSolverKind::direct_umfpack}); }
 
-/// configs/lung_small.json's EFG model at its shipped resolution, set up and assembled once (main() destroys it
-/// before MPI is finalised).
+/// configs/lung_small.json's EFG problem at its shipped resolution (the case and its meshless geometry are built
+/// once, untimed; Gmsh runs here).
+meshless::EfgProblem lung_small_problem() {
+  static const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json");
+  static const core::Geometry g = [] {
+    core::GeometryOptions options;
+    options.build_fem_mesh = false;
+    return core::build_geometry(c, options);
+  }();
+  return meshless::problem_from_case(c, g);
+}
+
+/// configs/lung_small.json's EFG model, set up and assembled once (main() destroys it before MPI is finalised).
 std::unique_ptr<meshless::EfgModel>& lung_model() {
   static std::unique_ptr<meshless::EfgModel> model;
   return model;
@@ -188,10 +199,7 @@ std::unique_ptr<meshless::EfgModel>& lung_model() {
 meshless::EfgModel& assembled_lung_small() {
   std::unique_ptr<meshless::EfgModel>& model = lung_model();
   if (!model) {
-    const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json");
-    core::GeometryOptions options;
-    options.build_fem_mesh = false;
-    model = std::make_unique<meshless::EfgModel>(meshless::problem_from_case(c, core::build_geometry(c, options)));
+    model = std::make_unique<meshless::EfgModel>(lung_small_problem());
     model->setup_system();
     model->assemble_system(true);  // the elastic tangent of the first step
   }
@@ -235,10 +243,6 @@ void BM_EfgAssemblyLung(benchmark::State& state) {
 /// contracts the residual by less than 1 / (range / 10) (EfgOptions::refactor_contraction = range / 10): the
 /// tangent-reuse rule, measured where it matters. Set-up excluded; assembly, solve and Newton iterations counted.
 void BM_EfgLungRunRefreshRule(benchmark::State& state) {
-  const core::Case c = core::load_case(std::string(TISSUE_SOURCE_DIR) + "/configs/lung_small.json");
-  core::GeometryOptions geometry_options;
-  geometry_options.build_fem_mesh = false;
-  const core::Geometry g = core::build_geometry(c, geometry_options);
   meshless::EfgOptions options;
   options.refactor_contraction = static_cast<double>(state.range(0)) / 10.0;
   meshless::EfgTimings timings;
@@ -246,7 +250,7 @@ void BM_EfgLungRunRefreshRule(benchmark::State& state) {
   double peak = 0.0;
   for (auto _ : state) {
     state.PauseTiming();
-    meshless::EfgModel model(meshless::problem_from_case(c, g), options);
+    meshless::EfgModel model(lung_small_problem(), options);
     model.setup_system();
     state.ResumeTiming();
     newton = factorisations = 0;

@@ -3,6 +3,8 @@
 // summary.json / samples.csv / table.md, the sweep row, the radar script, and the command's error contract.
 // The whole command on the lung runs in the accuracy gates (test_compare_accuracy.cpp).
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <unistd.h>
 
 #include <array>
@@ -316,6 +318,19 @@ TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {
   EXPECT_EQ(value("n_flagged"), "1");
   EXPECT_EQ(value("fem_error_bar_mm"), "");
   EXPECT_EQ(value("fem_seconds"), "10");
+}
+
+// A sweep reads each run's summary.json into its row from a worker thread: a summary cut short or written by another
+// version gives empty cells, never an exception (or a read of a missing key, which nlohmann leaves undefined).
+TEST(CompareSummary, SweepRowOfAnIncompleteSummaryIsEmptyCells) {
+  const auto& columns = experiments::compare_row_columns();
+  for (const json& s : {json::object(), json::array(), json("text"), json{{"n_samples", 3}, {"models", 1}}}) {
+    const auto values = experiments::compare_row_values(s);
+    ASSERT_EQ(values.size(), columns.size()) << s.dump();
+    const std::size_t filled = static_cast<std::size_t>(
+        std::count_if(values.begin(), values.end(), [](const std::string& v) { return !v.empty(); }));
+    EXPECT_EQ(filled, s.is_object() && s.contains("n_samples") ? 1u : 0u) << s.dump();
+  }
 }
 
 TEST(CompareSummary, IdenticalVariantsOnACutCaseAreReported) {

@@ -328,8 +328,11 @@ std::vector<std::string> compare_row_values(const json& s, const std::vector<std
     }
     return num(*p);
   };
-  const json& m = s["models"];
-  std::vector<std::string> values{at(s, {"n_samples"}), std::to_string(s["flagged_samples"].size()),
+  // A summary written by another version, or cut short, may lack any key: each missing one is an empty cell.
+  static const json no_models = json::object();
+  const json& m = s.is_object() && s.contains("models") ? s["models"] : no_models;
+  const bool has_flags = s.is_object() && s.contains("flagged_samples") && s["flagged_samples"].is_array();
+  std::vector<std::string> values{at(s, {"n_samples"}), has_flags ? std::to_string(s["flagged_samples"].size()) : "",
                                   at(s, {"reference", "peak_sample_displacement_mm"}),
                                   at(s, {"reference", "error_bar", "rms_mm"})};
   for (const auto& name : models)

@@ -625,15 +625,30 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
       } catch (const std::exception& e) {
         outcome.ok = false;
         outcome.error = e.what();
+      } catch (...) {
+        outcome.ok = false;
+        outcome.error = "the run stopped with an exception that is not a std::exception";
       }
       outcome.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      // The row's values, read from the run's summary.json; an unreadable summary fails this run, not the sweep
+      // (an exception leaving this thread would end the process).
+      std::vector<std::string> values(compare_row_columns(models).size());
+      std::string versus_extrapolated;
+      if (outcome.ok) {
+        try {
+          values = compare_row_values(outcome.summary, models);
+          versus_extrapolated = fem_vs_extrapolated(outcome.summary);
+        } catch (const std::exception& e) {
+          outcome.ok = false;
+          outcome.error = std::string("its summary.json could not be read as a comparison: ") + e.what();
+          values.assign(values.size(), std::string());
+        }
+      }
       std::replace(outcome.error.begin(), outcome.error.end(), '\n', ' ');  // one line in runs.csv and progress
       std::vector<std::string> row{run->id, outcome.ok ? "ok" : "failed"};
       for (const auto& v : run->values) row.push_back(value_text(v));
-      const std::vector<std::string> values = outcome.ok ? compare_row_values(outcome.summary, models)
-                                                         : std::vector<std::string>(compare_row_columns(models).size());
       row.insert(row.end(), values.begin(), values.end());
-      row.push_back(outcome.ok ? fem_vs_extrapolated(outcome.summary) : std::string());
+      row.push_back(versus_extrapolated);
       row.push_back(fmt::format("{:.3f}", outcome.wall_seconds));
       row.push_back(outcome.ok ? "" : outcome.error);
       std::lock_guard<std::mutex> guard(mutex);

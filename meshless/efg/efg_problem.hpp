@@ -45,7 +45,7 @@ struct EfgOptions {
   /// newton_tolerance within max_newton_iterations; refresh the tangent otherwise (k != 0). 0 gives full Newton
   /// (a fresh tangent every iteration). 0.5: an iteration on the kept factors costs a residual and a
   /// back-substitution, a refresh the whole tangent and a GMRES solve, about 8x as much on the lung
-  /// (docs/MESHLESS.md §2, "Tangent reuse": 0.2 before, 16 % slower on lung_small).
+  /// (docs/MESHLESS.md §2, "Why 2× and not 5×": 0.2 before, 1.32× slower over lung_small's run).
   double refactor_contraction = 0.5;
   /// When the kept factors stop contracting (above), the new tangent is first solved by GMRES preconditioned
   /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many

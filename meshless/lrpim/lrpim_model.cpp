@@ -177,7 +177,10 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   std::vector<std::vector<LocalIntegrationPoint>> vol(n), rea(n), sup(n), tra(n);
   constrained_.assign(n, 0);
   double min_rcond = 1.0, defect = 0.0;
-  std::exception_ptr error;  // the first, rethrown as it is (SingularRpimMatrix keeps its data)
+  // The lowest node's error, rethrown as it is (SingularRpimMatrix keeps its data): the same message whatever the
+  // threads' order.
+  std::exception_ptr error;
+  int error_node = n;
 #pragma omp parallel for schedule(dynamic, 4) reduction(min : min_rcond) reduction(max : defect)
   for (int i = 0; i < n; ++i) {
     try {
@@ -252,7 +255,10 @@ LrpimModel::LrpimModel(LrpimProblem problem)
       }
     } catch (...) {
 #pragma omp critical
-      if (!error) error = std::current_exception();
+      if (i < error_node) {
+        error_node = i;
+        error = std::current_exception();
+      }
     }
   }
   if (error) std::rethrow_exception(error);
@@ -356,7 +362,9 @@ void LrpimModel::assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorX
   new_states->resize(states_.size());
   double* values = k ? k->valuePtr() : nullptr;
   const double s = problem_.load_scale ? problem_.load_scale(time) : 1.0;
-  std::exception_ptr error;  // the first, rethrown as it is (core::InadmissibleStrain keeps its data)
+  // The lowest node's error, rethrown as it is (core::InadmissibleStrain keeps its data).
+  std::exception_ptr error;
+  int error_node = n;
 #pragma omp parallel for schedule(dynamic, 16)
   for (int i = 0; i < n; ++i) {
     try {
@@ -407,7 +415,10 @@ void LrpimModel::assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorX
       }
     } catch (...) {
 #pragma omp critical
-      if (!error) error = std::current_exception();
+      if (i < error_node) {
+        error_node = i;
+        error = std::current_exception();
+      }
     }
   }
   if (error) std::rethrow_exception(error);

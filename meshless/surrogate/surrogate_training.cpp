@@ -141,6 +141,9 @@ std::vector<SolvedLoad> solve_patch_loads(const EfgProblem& problem, const EfgOp
   const int by_memory =
       rep.model_bytes > 0.0 ? static_cast<int>(options.memory_budget_bytes / rep.model_bytes) : cap;
   rep.workers = std::max(1, std::min({cap, by_memory, static_cast<int>(loads.size()) - 1}));
+  // PETSc keeps process-wide state (its options stack, PETSC_COMM_WORLD), so its Krylov solve runs in one thread at
+  // a time: a cloud too large to factorise trains its loads one after another.
+  if (first->statistics().linear_solver_kind == LinearSolverKind::petsc_krylov) rep.workers = 1;
   const int threads_per_worker = std::max(1, hardware / rep.workers);
 
   std::atomic<std::size_t> next{1};
