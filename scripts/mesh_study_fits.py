@@ -1,0 +1,52 @@
+#!/usr/bin/python3
+"""Cross-check of the reference's error bar: least-squares fits of the mesh study's sample displacements.
+
+`tissue verify fem` extrapolates the samples by Richardson from the last three levels with one order (the observed
+one inside 0.3 of the expected one, the expected one otherwise; docs/EXPERIMENTS.md §1c). Where the observed order
+lies between two plausible ones (lung_large: 2.61 and 2.63 against the expected 2), this script fits, for each sample
+component over the last N levels,
+
+    u_h = u* + a h^p            (one term, p = 2 or 3)
+    u_h = u* + a h^2 + b h^3    (two terms: the graded singular lines' pollution and the smooth P2 error)
+
+and prints each fit's residual and the distance of the finest level from its u* (RMS over the samples, relative to
+the largest sample displacement). Reads results/verify/fem.json (or the file given). Needs python3-numpy.
+
+    /usr/bin/python3 scripts/mesh_study_fits.py [results/verify/fem.json]
+"""
+import json
+import sys
+
+import numpy as np
+
+FITS = [("h^2", [2]), ("h^3", [3]), ("h^2 + h^3", [2, 3])]
+
+
+def main(path):
+    with open(path) as f:
+        studies = json.load(f)["mesh_convergence"]
+    for case, study in studies.items():
+        levels = study["levels"]
+        h = np.array([level["mesh_size_mm"] for level in levels])
+        u = np.array([np.ravel(level["sample_displacements_mm"]) for level in levels])
+        peak = np.max(np.linalg.norm(u[-1].reshape(-1, 3), axis=1))
+        print(f"{case}: levels {', '.join(f'{x:g}' for x in h)} mm; peak sample displacement {peak:.4f} mm")
+        for i in range(len(h) - 2):
+            ratio = 0.5 * (h[i] / h[i + 1] + h[i + 1] / h[i + 2])
+            order = np.log(np.linalg.norm(u[i + 1] - u[i]) / np.linalg.norm(u[i + 2] - u[i + 1])) / np.log(ratio)
+            print(f"  observed order over {h[i]:g} / {h[i + 1]:g} / {h[i + 2]:g} mm: {order:.2f}")
+        print("  | fit | levels | residual RMS [mm] | finest level from u* (RMS) |")
+        print("  |---|---|---|---|")
+        for name, powers in FITS:
+            for count in range(len(powers) + 2, len(h) + 1):
+                hs, us = h[-count:], u[-count:]
+                design = np.column_stack([np.ones(count)] + [hs**p for p in powers])
+                coefficients = np.linalg.lstsq(design, us, rcond=None)[0]
+                residual = np.sqrt(np.mean((design @ coefficients - us) ** 2))
+                distance = np.sqrt(np.mean(np.sum(((us[-1] - coefficients[0]).reshape(-1, 3)) ** 2, axis=1)))
+                print(f"  | {name} | {', '.join(f'{x:g}' for x in hs)} mm | {residual:.1e} | "
+                      f"{distance:.4f} mm ({100 * distance / peak:.2f} %) |")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1] if len(sys.argv) > 1 else "results/verify/fem.json")
