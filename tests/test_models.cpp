@@ -151,6 +151,13 @@ TEST(EfgErrors, AnInadmissibleStrainBesideTheCutsFrontNamesTheFrontTransition) {
             "over ℓ = 0.00 mm (/meshless/front_transition), and a sharp front concentrates the strain beside it. To "
             "stay inside the range: set /meshless/front_transition to about node_spacing / 5 = 3.2 mm, which closes "
             "the cut over that distance (docs/MESHLESS.md §5.2)");
+  // With ℓ already a fifth of the spacing the advice is a longer ℓ or a smaller force, not the same ℓ again.
+  EXPECT_EQ(experiments::front_transition_hint(beside_front, spec, cut, 0.0032),
+            "That point is 1.41 mm from the cut's front, within one node spacing: the enrichment closes the cut there "
+            "over ℓ = 3.20 mm (/meshless/front_transition), and a sharp front concentrates the strain beside it. To "
+            "stay inside the range: ℓ is already at least node_spacing / 5, so lengthen it (/meshless/front_transition "
+            "= 6.4 mm closes the cut over twice the distance) or lower /load/force; the cloud does not resolve the "
+            "strain beside this front at this load (docs/MESHLESS.md §5.2)");
   EXPECT_EQ(experiments::front_transition_hint(far_away, spec, cut, 0.0), "");  // 30 mm from the front
   EXPECT_EQ(experiments::front_transition_hint(beside_front, spec, std::nullopt, 0.0), "");
   const std::string paper = experiments::front_transition_hint(beside_front, spec.in_paper_configuration(), cut, 0.0);

@@ -3,19 +3,19 @@
 #include <Eigen/Dense>
 #include <fmt/format.h>
 
-#include <limits>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <exception>
+#include <limits>
 #include <stdexcept>
 #include <unordered_map>
 
 #include "meshless/cut/cut_weights.hpp"
-#include "meshless/solvers/efg_linear_solver.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/node_search.hpp"
 #include "meshless/mls/support_radii.hpp"
+#include "meshless/parallel_for.hpp"
+#include "meshless/solvers/efg_linear_solver.hpp"
 
 namespace meshless {
 
@@ -47,27 +47,6 @@ inline Eigen::Matrix<double, 3, 6> b_transpose(const Eigen::Vector3d& g) {
       0.0, g.y(), 0.0, g.x(), g.z(), 0.0,     //
       0.0, 0.0, g.z(), 0.0, g.y(), g.x();
   return bt;
-}
-
-/// Runs body(i) for i in [0, n) in parallel; rethrows the first exception (by index) after the loop, because an
-/// exception must not leave an OpenMP region.
-template <class Body>
-void parallel_for(int n, int chunk, const Body& body) {
-  std::exception_ptr error;
-  int error_index = n;
-#pragma omp parallel for schedule(dynamic, chunk)
-  for (int i = 0; i < n; ++i) {
-    try {
-      body(i);
-    } catch (...) {
-#pragma omp critical(efg_parallel_error)
-      if (i < error_index) {
-        error_index = i;
-        error = std::current_exception();
-      }
-    }
-  }
-  if (error) std::rethrow_exception(error);
 }
 
 }  // namespace
