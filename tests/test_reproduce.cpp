@@ -10,6 +10,7 @@
 
 #include "core/case.hpp"
 #include "core/case_error.hpp"
+#include "experiments/studies/cloud_change.hpp"
 #include "experiments/studies/reproduce.hpp"
 
 namespace {
@@ -51,6 +52,10 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
   EXPECT_DOUBLE_EQ(plan.table1[1].paper_enrichment_mm, 4.04);  // cutting
   EXPECT_DOUBLE_EQ(plan.table1[1].paper_visibility_mm, 8.03);
   EXPECT_TRUE(std::filesystem::exists(plan.table1[1].config)) << plan.table1[1].config;
+  // The cut row's verdict takes the meshless cloud change from the two kept sweeps over its node cloud.
+  ASSERT_EQ(plan.table1[1].cloud_studies.size(), 2u);
+  for (const std::string& study : plan.table1[1].cloud_studies)
+    EXPECT_TRUE(std::filesystem::is_directory(study + "/runs")) << study;
   // Fig. 9: 8 groups of forces within 0-4 N at one stressed point.
   ASSERT_EQ(plan.timing.forces.size(), 8u);
   for (double f : plan.timing.forces) {
@@ -90,6 +95,82 @@ TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {
   const std::string twice = write_plan("twice", plan_text(lung, "[1.0]", "small"));
   EXPECT_NE(error_of(twice).find("/table1/1/label"), std::string::npos) << error_of(twice);
 
+  std::string no_folder = plan_text(lung, "[1.0]", "large");
+  no_folder.insert(no_folder.find("}}") + 1, ", \"cloud_studies\": [\"a\", 3]");  // in /table1/0
+  const std::string cloud = error_of(write_plan("cloud", no_folder));
+  EXPECT_NE(cloud.find("/table1/0/cloud_studies/1"), std::string::npos) << cloud;
+
   const std::string not_json = write_plan("not_json", "{\"table1\": [");
   EXPECT_NE(error_of(not_json).find("valid JSON"), std::string::npos) << error_of(not_json);
+}
+
+namespace {
+
+/// A comparison summary.json of a sweep run on another node cloud: the reference's peak and each model's RMSE [mm]
+/// (a negative RMSE: the model did not solve).
+void write_run(const std::filesystem::path& study, const std::string& id, double peak, double enrichment,
+               double visibility) {
+  nlohmann::json s = {{"reference", {{"peak_sample_displacement_mm", peak}}},
+                      {"models", nlohmann::json::object()},
+                      {"not_solved", nlohmann::json::object()}};
+  for (const auto& [name, rmse] : {std::pair<std::string, double>{"enrichment", enrichment}, {"visibility", visibility}})
+    if (rmse >= 0.0)
+      s["models"][name] = {{"rmse_mm", rmse}, {"details", {{"n_nodes", 5420}}}};
+    else
+      s["not_solved"][name] = {{"why", "failed: strain beyond the law's range"}};
+  std::filesystem::create_directories(study / "runs" / id);
+  std::ofstream(study / "runs" / id / "summary.json") << s.dump();
+}
+
+}  // namespace
+
+// The cloud change of Table 1's cut row: the change of the difference where another cloud solved both variants, else
+// the largest change of one variant's RMSE; runs against another reference are never mixed in.
+TEST(CloudChange, TakesTheDifferenceWhereBothSolvedElseOneModelsRmse) {
+  const auto root = std::filesystem::temp_directory_path() / "tissue_cloud_change";
+  std::filesystem::remove_all(root);
+  const experiments::CloudChangeBaseline row{"enrichment", "visibility", 0.1021, 0.1439, 9.9079};
+  // Only the baseline solves on the other cloud: |0.2430 - 0.1439| = 0.0991 mm.
+  write_run(root / "a", "run1", 9.9079, -1.0, 0.2430);
+  write_run(root / "a", "run2", 9.5, 0.3, 0.3);  // another reference: unused
+  experiments::CloudChange c = experiments::cloud_change({(root / "a").string()}, row);
+  ASSERT_TRUE(c.known) << c.why_unknown;
+  EXPECT_NEAR(c.mm, 0.0991, 1e-12);
+  EXPECT_EQ(c.measure, "one model's RMSE");
+  ASSERT_EQ(c.runs.size(), 2u);
+  EXPECT_EQ(c.runs[0]["enrichment"]["not_solved"], "failed: strain beyond the law's range");
+  EXPECT_NE(c.runs[1]["unused"].get<std::string>().find("another reference"), std::string::npos) << c.runs.dump();
+  // A second study where both solve: the difference moves from -0.0418 to -0.0300 mm, a change of 0.0118 mm.
+  write_run(root / "b", "run3", 9.9079, 0.1100, 0.1400);
+  c = experiments::cloud_change({(root / "a").string(), (root / "b").string()}, row);
+  ASSERT_TRUE(c.known);
+  EXPECT_NEAR(c.mm, 0.0118, 1e-12);
+  EXPECT_EQ(c.measure, "difference");
+  // No study, or a folder without runs: unknown, with what to run.
+  EXPECT_FALSE(experiments::cloud_change({}, row).known);
+  const experiments::CloudChange none = experiments::cloud_change({(root / "none").string()}, row);
+  EXPECT_FALSE(none.known);
+  EXPECT_NE(none.why_unknown.find("tissue sweep"), std::string::npos) << none.why_unknown;
+}
+
+// The verdict sets the difference against sqrt(bar^2 + cloud change^2): 0.0418 / hypot(0.071, 0.0991) = 0.34.
+TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
+  nlohmann::json row = {
+      {"models", {{{"name", "enrichment"}, {"role", "proposed: the paper's model"}, {"rmse_mm", 0.1021}},
+                  {{"name", "visibility"}, {"role", "baseline: the visibility criterion"}, {"rmse_mm", 0.1439}}}},
+      {"difference_mm", -0.0418},
+      {"cut_effect", nullptr},
+      {"reference_error_bar", {{"known", true}, {"rms_mm", 0.071}}}};
+  EXPECT_EQ(experiments::table1_verdict(row),
+            "enrichment closer; the difference is 0.6× the reference's bar (the cloud change is not measured): not "
+            "significant");
+  row["cloud_change"] = {{"known", true}, {"mm", 0.0991}, {"measure", "one model's RMSE"}};
+  EXPECT_EQ(experiments::table1_verdict(row),
+            "enrichment closer; the difference is 0.3× the reference's bar and the cloud change combined: not "
+            "significant");
+  row["reference_error_bar"]["rms_mm"] = 0.01;
+  row["cloud_change"]["mm"] = 0.01;  // 0.0418 / 0.01414 = 2.96
+  EXPECT_NE(experiments::table1_verdict(row).find("3.0× the reference's bar and the cloud change combined: significant"),
+            std::string::npos)
+      << experiments::table1_verdict(row);
 }

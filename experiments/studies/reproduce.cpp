@@ -18,6 +18,7 @@
 #include "core/json_reader.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/comparator/compare.hpp"
+#include "experiments/studies/cloud_change.hpp"
 #include "experiments/io/child_process.hpp"
 #include "experiments/models/model_registry.hpp"
 #include "experiments/models/model_result.hpp"
@@ -90,10 +91,34 @@ const json* model_with_role(const json& row, const std::string& kind) {
   return nullptr;
 }
 
-/// Which of the proposed model and the baseline is closer to the reference, and whether the difference stands out of
-/// the reference's error bar. Only the reference's bar enters: the meshless model's own change between clouds is
-/// common to both variants on the same cloud, and is not measured by one run.
-std::string verdict(const json& r) {
+/// The models of every row, in first-seen order: one column each.
+std::vector<std::pair<std::string, std::string>> table1_columns(const json& rows) {
+  std::vector<std::pair<std::string, std::string>> columns;  // name, role kind
+  for (const json& r : rows)
+    for (const json& m : r.at("models")) {
+      const std::string name = m.at("name");
+      if (std::none_of(columns.begin(), columns.end(), [&](const auto& c) { return c.first == name; }))
+        columns.emplace_back(name, role_kind(m.at("role").get<std::string>()));
+    }
+  return columns;
+}
+
+/// The row's cloud change from the plan's cloud studies (experiments/studies/cloud_change.hpp).
+CloudChange row_cloud_change(const ReproducePlan::Table1Case& t, const json& row) {
+  const json* p = model_with_role(row, "proposed");
+  const json* b = model_with_role(row, "baseline");
+  if (!p || !b) {
+    CloudChange none;
+    none.why_unknown = "the case has no solved proposed model and baseline";
+    return none;
+  }
+  return cloud_change(t.cloud_studies, {p->at("name"), b->at("name"), p->at("rmse_mm").get<double>(),
+                                        b->at("rmse_mm").get<double>(), row.at("peak_reference_mm").get<double>()});
+}
+
+}  // namespace
+
+std::string table1_verdict(const json& r) {
   const json* proposed = model_with_role(r, "proposed");
   const json* baseline = model_with_role(r, "baseline");
   if (!proposed || !baseline || !r.at("difference_mm").is_number()) return "no proposed model and baseline to compare";
@@ -110,22 +135,18 @@ std::string verdict(const json& r) {
   }
   const json& bar = r.at("reference_error_bar");
   if (!bar.value("known", false)) return closer + " closer" + effect + "; significance unknown (no error bar)";
-  const double ratio = std::abs(difference) / bar.at("rms_mm").get<double>();
-  return fmt::format("{} closer{}; the difference is {:.1f}× the reference's bar: {}", closer, effect, ratio,
+  const double bar_mm = bar.at("rms_mm").get<double>();
+  const json cloud = r.value("cloud_change", json::object());
+  const bool with_cloud = cloud.value("known", false);
+  const double cloud_mm = with_cloud ? cloud.at("mm").get<double>() : 0.0;
+  const double ratio = std::abs(difference) / std::hypot(bar_mm, cloud_mm);
+  return fmt::format("{} closer{}; the difference is {:.1f}× {}: {}", closer, effect, ratio,
+                     with_cloud ? "the reference's bar and the cloud change combined"
+                                : "the reference's bar (the cloud change is not measured)",
                      ratio > 2.0 ? "significant" : ratio > 1.0 ? "marginal" : "not significant");
 }
 
-/// The models of every row, in first-seen order: one column each.
-std::vector<std::pair<std::string, std::string>> table1_columns(const json& rows) {
-  std::vector<std::pair<std::string, std::string>> columns;  // name, role kind
-  for (const json& r : rows)
-    for (const json& m : r.at("models")) {
-      const std::string name = m.at("name");
-      if (std::none_of(columns.begin(), columns.end(), [&](const auto& c) { return c.first == name; }))
-        columns.emplace_back(name, role_kind(m.at("role").get<std::string>()));
-    }
-  return columns;
-}
+namespace {
 
 std::string table1_md(const json& rows) {
   const auto columns = table1_columns(rows);
@@ -135,8 +156,8 @@ std::string table1_md(const json& rows) {
     md += fmt::format(" {} ({}) [mm] |", name, kind);
     rule += "---|";
   }
-  md += " difference [mm] | without flagged samples [mm] | cut effect RMSE [mm] | reference error bar | verdict | "
-        "paper: proposed / baseline / difference [mm] |\n" + rule + "---|---|---|---|---|---|\n";
+  md += " difference [mm] | without flagged samples [mm] | cut effect RMSE [mm] | reference error bar | meshless cloud "
+        "change [mm] | verdict | paper: proposed / baseline / difference [mm] |\n" + rule + "---|---|---|---|---|---|---|\n";
   for (const json& r : rows) {
     const auto find = [&](const std::string& name) -> const json* {
       for (const json& m : r.at("models"))
@@ -170,10 +191,34 @@ std::string table1_md(const json& rows) {
                                       ? fmt::format("{:.3f} mm ({})", bar.at("rms_mm").get<double>(),
                                                     bar.value("method", std::string()))
                                       : "unknown: " + bar.value("why_unknown", std::string());
-    md += fmt::format(" {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
+    const json cloud = r.value("cloud_change", json::object());
+    const std::string cloud_change =
+        cloud.value("known", false)
+            ? fmt::format("{:.4f} ({})", cloud.at("mm").get<double>(), cloud.at("measure").get<std::string>())
+            : "–";
+    md += fmt::format(" {} | {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
                       number_or_dash(r.at("difference_mm"), "{:+.4f}"), unflagged.empty() ? "–" : unflagged,
-                      effect.empty() ? "–" : effect, error_bar, verdict(r), r.at("paper_enrichment_mm").get<double>(),
+                      effect.empty() ? "–" : effect, error_bar, cloud_change, table1_verdict(r), r.at("paper_enrichment_mm").get<double>(),
                       r.at("paper_visibility_mm").get<double>(), r.at("paper_difference_mm").get<double>());
+  }
+  for (const json& r : rows) {
+    const json cloud = r.value("cloud_change", json::object());
+    if (cloud.value("known", false)) {
+      std::string runs;
+      for (const json& run : cloud.at("runs")) {
+        std::string models;
+        for (const auto& [name, v] : run.items())
+          if (v.is_object())
+            models += fmt::format("{}{} {}", models.empty() ? "" : ", ", name,
+                                  v.contains("rmse_mm") ? fmt::format("{:.4f} mm ({} nodes)", v.at("rmse_mm").get<double>(),
+                                                                      v.at("n_nodes").dump())
+                                                        : std::string("not solved"));
+        runs += fmt::format("\n- {}: {}", run.at("run").get<std::string>(),
+                            run.contains("unused") ? "unused, " + run.at("unused").get<std::string>() : models);
+      }
+      md += fmt::format("\n{}: the meshless cloud change, from the kept runs of its cloud studies:{}\n",
+                        r.at("label").get<std::string>(), runs);
+    }
   }
   for (const json& r : rows)
     for (const json& m : r.at("models"))
@@ -187,8 +232,11 @@ std::string table1_md(const json& rows) {
         "its RMSE is the reference's own RMS displacement, which any model must beat). The difference is the "
         "proposed model's RMSE minus the baseline's. The cut effect is each model's cut solve minus its own uncut "
         "solve, compared with the FEM's, so that the meshless model's common discretisation error does not decide "
-        "which cut treatment wins. The verdict's significance sets the difference of the RMSEs against the "
-        "reference's error bar (RMS): above 2× significant, 1–2× marginal. Each case's full comparison (per-sample "
+        "which cut treatment wins. The meshless cloud change is how far the difference moves when only the node cloud "
+        "changes (the plan's cloud_studies; where the proposed model solves on no other cloud, the largest change of "
+        "one model's RMSE stands in for it). The verdict's significance sets the difference of the RMSEs against the "
+        "reference's error bar (RMS) and the cloud change combined, sqrt(bar² + change²): above 2× significant, 1–2× "
+        "marginal. Each case's full comparison (per-sample "
         "errors, flags, timings, radar diagram) is in its sub-folder.\n";
   return md;
 }
@@ -430,6 +478,15 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
     row.paper_enrichment_mm = paper.in_range("enrichment_mm", 0.0, 1e3, true, true);
     row.paper_visibility_mm = paper.in_range("visibility_mm", 0.0, 1e3, true, true);
     paper.finish();
+    if (t.has("cloud_studies")) {
+      const json& studies = t.array("cloud_studies", 1, "a non-empty array of sweep folders relative to the plan");
+      for (std::size_t k = 0; k < studies.size(); ++k) {
+        if (!studies[k].is_string() || studies[k].get<std::string>().empty())
+          t.fail(fmt::format("cloud_studies/{}", k), "a sweep folder (a string, relative to the plan's folder)");
+        row.cloud_studies.push_back(
+            (std::filesystem::path(file).parent_path() / studies[k].get<std::string>()).lexically_normal().string());
+      }
+    }
     t.finish();
     for (const auto& other : plan.table1)
       if (other.label == row.label) t.fail("label", "a label no other Table 1 case has");
@@ -498,7 +555,9 @@ int run_reproduce(const ReproduceOptions& options) {
       compare.plot = options.plot;
       if (const int code = run_compare(t.config, compare); code != 0)
         throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
-      rows.push_back(table1_row(t, read_json_file(out.file(t.label + "/summary.json").string())));
+      json row = table1_row(t, read_json_file(out.file(t.label + "/summary.json").string()));
+      row["cloud_change"] = row_cloud_change(t, row).to_json();
+      rows.push_back(row);
     }
     write_text_file(out.file("table1.json").string(), json{{"rows", rows}}.dump(2) + "\n");
     const std::string md = table1_md(rows);

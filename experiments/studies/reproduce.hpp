@@ -29,6 +29,9 @@ struct ReproducePlan {
     std::string config;  ///< the case, resolved to a path
     double paper_enrichment_mm = 0.0;  ///< the paper's Table 1: proposed model
     double paper_visibility_mm = 0.0;  ///< the paper's Table 1: interactive meshless cutting model
+    /// Sweep folders over this case's node cloud (resolved; experiments/studies/cloud_change.hpp): the meshless
+    /// model's own change between clouds, which the verdict combines with the reference's error bar.
+    std::vector<std::string> cloud_studies;
   };
   struct Timing {
     std::string config;          ///< the case whose load point is stressed, resolved to a path
@@ -64,5 +67,10 @@ struct ReproduceOptions {
 
 /// `tissue reproduce`; returns the exit code.
 int run_reproduce(const ReproduceOptions& options);
+
+/// Table 1's verdict on one row of table1.json: which of the proposed model and the baseline is closer to the
+/// reference, and whether their difference stands out of the reference's error bar and the meshless model's own
+/// change between node clouds, combined as sqrt(bar^2 + change^2).
+std::string table1_verdict(const nlohmann::json& row);
 
 }  // namespace experiments
