@@ -271,12 +271,22 @@ SurrogateSpec read_surrogate(const std::optional<JsonReader>& r, const LoadSpec&
 
 }  // namespace
 
+namespace {
+
+/// A local size graded against a fixed length L of the problem: f * h * (h / L)^(g - 1). It falls like h^g under
+/// refinement, and equals f * h at h = L (so grading changes nothing at the size where it is anchored).
+double graded_size(double refinement, double grading, double size, double anchor) {
+  return refinement * size * std::pow(size / anchor, grading - 1.0);
+}
+
+}  // namespace
+
 double GeometrySpec::load_patch_size(double size, double load_radius) const {
-  return load_patch_refinement * size * std::pow(size / load_radius, load_patch_grading - 1.0);
+  return graded_size(load_patch_refinement, load_patch_grading, size, load_radius);
 }
 
 double GeometrySpec::crack_front_size(double size, double cut_depth) const {
-  return crack_front_refinement * size * std::pow(size / cut_depth, crack_front_grading - 1.0);
+  return graded_size(crack_front_refinement, crack_front_grading, size, cut_depth);
 }
 
 Case parse_case(const nlohmann::json& document, const std::string& file) {

@@ -42,9 +42,10 @@ struct GeometrySpec {
   /// (docs/FEM_REFERENCE.md, "Grading the crack's front"). Ignored without a cut. The node cloud is not graded.
   double crack_front_refinement = 1.0;
   double crack_front_grading = 1.0;
-  /// The local size under the probe [m] when meshing at `size` [m] with a load patch of radius `load_radius` [m].
+  /// The local size under the probe when meshing at `size` with a load patch of radius `load_radius` (all three in
+  /// one length unit: the mesher passes mm).
   double load_patch_size(double size, double load_radius) const;
-  /// The local size along the crack's front [m] when meshing at `size` [m] a cut of depth `cut_depth` [m].
+  /// The local size along the crack's front when meshing at `size` a cut of depth `cut_depth` (one length unit).
   double crack_front_size(double size, double cut_depth) const;
 };
 

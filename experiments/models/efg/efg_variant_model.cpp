@@ -4,34 +4,34 @@
 
 namespace experiments {
 
-std::string EfgVariantModel::name() const {
-  switch (variant_) {
-    case Variant::enrichment: return "enrichment";
-    case Variant::visibility: return "visibility";
-    case Variant::paper: return "paper";
-  }
-  return {};
+namespace {
+
+/// What each variant says of itself: name, role and one-line description (Model's three texts), in Variant's order.
+struct VariantText {
+  const char* name;
+  const char* role;
+  const char* description;
+};
+
+const VariantText& text_of(EfgVariantModel::Variant v) {
+  static const VariantText table[] = {
+      {"enrichment", "proposed: the EFG with MLS weights enriched across the cut (eqs. 29-32)",
+       "The paper's EFG model, enrichment across the cut (docs/MESHLESS.md)"},
+      {"visibility", "baseline: the EFG with the visibility criterion across the cut",
+       "The paper's EFG model, visibility criterion across the cut (the baseline)"},
+      {"paper",
+       "as published: the proposed EFG in the paper's configuration (plain Gauss quadrature of eq. 22, the "
+       "enrichment without a front transition)",
+       "The paper's EFG model as published: /meshless/preset \"paper\" (docs/MESHLESS.md §1)"},
+  };
+  return table[static_cast<int>(v)];
 }
 
-std::string EfgVariantModel::role() const {
-  switch (variant_) {
-    case Variant::enrichment: return "proposed: the EFG with MLS weights enriched across the cut (eqs. 29-32)";
-    case Variant::visibility: return "baseline: the EFG with the visibility criterion across the cut";
-    case Variant::paper:
-      return "as published: the proposed EFG in the paper's configuration (plain Gauss quadrature of eq. 22, the "
-             "enrichment without a front transition)";
-  }
-  return {};
-}
+}  // namespace
 
-std::string EfgVariantModel::description() const {
-  switch (variant_) {
-    case Variant::enrichment: return "The paper's EFG model, enrichment across the cut (docs/MESHLESS.md)";
-    case Variant::visibility: return "The paper's EFG model, visibility criterion across the cut (the baseline)";
-    case Variant::paper: return "The paper's EFG model as published: /meshless/preset \"paper\" (docs/MESHLESS.md §1)";
-  }
-  return {};
-}
+std::string EfgVariantModel::name() const { return text_of(variant_).name; }
+std::string EfgVariantModel::role() const { return text_of(variant_).role; }
+std::string EfgVariantModel::description() const { return text_of(variant_).description; }
 
 std::string EfgVariantModel::same_as(const core::Case& c) const {
   if (variant_ == Variant::visibility && !c.cut) return "enrichment";
