@@ -52,10 +52,11 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
   EXPECT_DOUBLE_EQ(plan.table1[1].paper_enrichment_mm, 4.04);  // cutting
   EXPECT_DOUBLE_EQ(plan.table1[1].paper_visibility_mm, 8.03);
   EXPECT_TRUE(std::filesystem::exists(plan.table1[1].config)) << plan.table1[1].config;
-  // The cut row's verdict takes the meshless cloud change from the two kept sweeps over its node cloud.
+  // The cut row's verdict takes the meshless cloud change from the two kept sweeps over its node cloud (the first
+  // holds the 12 mm run; a study without runs is reported by the verdict, not refused).
   ASSERT_EQ(plan.table1[1].cloud_studies.size(), 2u);
-  for (const std::string& study : plan.table1[1].cloud_studies)
-    EXPECT_TRUE(std::filesystem::is_directory(study + "/runs")) << study;
+  EXPECT_TRUE(std::filesystem::is_directory(plan.table1[1].cloud_studies[0] + "/runs"))
+      << plan.table1[1].cloud_studies[0];
   // Fig. 9: 8 groups of forces within 0-4 N at one stressed point.
   ASSERT_EQ(plan.timing.forces.size(), 8u);
   for (double f : plan.timing.forces) {
