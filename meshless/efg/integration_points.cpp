@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -14,6 +13,7 @@
 #include "meshless/cut/cut_quadrature.hpp"
 #include "meshless/efg/gauss_quadrature_tet.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
+#include "meshless/parallel_for.hpp"
 
 namespace meshless {
 namespace {
@@ -137,28 +137,14 @@ QuadraturePoints lip_quadrature(const core::TetMesh& mesh, int order, const core
 
 namespace {
 
-/// MLS evaluations at the listed points, in parallel. Exceptions must not escape an OpenMP region: the first one
-/// (lowest point index) is kept and rethrown.
+/// MLS evaluations at the listed points (in increasing order), in parallel; a failure is the lowest point's.
 std::vector<MlsEvaluation> evaluate_at(const MlsShapeFunctions& mls, const QuadraturePoints& points,
                                        const std::vector<int>& which, bool with_gradients) {
-  const int count = static_cast<int>(which.size());
-  std::vector<MlsEvaluation> evals(count);
-  std::exception_ptr error;
-  int error_point = points.size();
-#pragma omp parallel for schedule(dynamic, 256)
-  for (int k = 0; k < count; ++k) {
+  std::vector<MlsEvaluation> evals(which.size());
+  parallel_for(static_cast<int>(which.size()), 256, [&](int k) {
     const int q = which[k];
-    try {
-      mls.evaluate(points.points.row(q).transpose(), with_gradients, &evals[k], points.sides[q]);
-    } catch (...) {
-#pragma omp critical(tabulate_error)
-      if (q < error_point) {
-        error_point = q;
-        error = std::current_exception();
-      }
-    }
-  }
-  if (error) std::rethrow_exception(error);
+    mls.evaluate(points.points.row(q).transpose(), with_gradients, &evals[k], points.sides[q]);
+  });
   return evals;
 }
 
