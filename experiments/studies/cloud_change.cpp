@@ -42,10 +42,10 @@ CloudChange cloud_change(const std::vector<std::string>& study_dirs, const Cloud
   }
   const double this_difference = row.proposed_rmse_mm - row.baseline_rmse_mm;
   double both = -1.0, one = -1.0;
-  std::vector<std::string> missing;
+  std::size_t missing = 0;  // study folders without a runs/ folder
   for (const std::string& dir : study_dirs) {
     if (!fs::is_directory(fs::path(dir) / "runs")) {
-      missing.push_back(dir);
+      ++missing;
       continue;
     }
     std::vector<fs::path> folders;
@@ -90,7 +90,7 @@ CloudChange cloud_change(const std::vector<std::string>& study_dirs, const Cloud
     result.measure = both >= 0.0 ? "difference" : "one model's RMSE";
   } else {
     result.why_unknown =
-        missing.size() == study_dirs.size()
+        missing == study_dirs.size()
             ? fmt::format("no results in {} (run its sweep: `tissue sweep configs/sweeps/<name>.json`)",
                           study_dirs.front())
             : "no run of the cloud studies solved either model against this reference";

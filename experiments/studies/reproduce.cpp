@@ -43,13 +43,17 @@ json read_json_file(const std::string& file) {
   }
 }
 
+/// A path written in the plan, which is relative to the plan's folder.
+std::filesystem::path relative_to_plan(const std::string& plan_file, const std::string& path) {
+  return (std::filesystem::path(plan_file).parent_path() / std::filesystem::path(path)).lexically_normal();
+}
+
 /// A case path of the plan, relative to the plan's folder; it must exist.
 std::string resolve_case(const core::JsonReader& r, const std::string& key, const std::string& plan_file) {
-  const std::filesystem::path p =
-      std::filesystem::path(plan_file).parent_path() / std::filesystem::path(r.string(key));
+  const std::filesystem::path p = relative_to_plan(plan_file, r.string(key));
   if (!std::filesystem::is_regular_file(p))
     r.fail(key, fmt::format("a case file relative to the plan's folder ({} does not exist)", p.string()));
-  return p.lexically_normal().string();
+  return p.string();
 }
 
 /// The Table 1 RMSEs of one `tissue compare` summary.json, one entry per scored model of the case (its /compare
@@ -198,8 +202,9 @@ std::string table1_md(const json& rows) {
             : "–";
     md += fmt::format(" {} | {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
                       number_or_dash(r.at("difference_mm"), "{:+.4f}"), unflagged.empty() ? "–" : unflagged,
-                      effect.empty() ? "–" : effect, error_bar, cloud_change, table1_verdict(r), r.at("paper_enrichment_mm").get<double>(),
-                      r.at("paper_visibility_mm").get<double>(), r.at("paper_difference_mm").get<double>());
+                      effect.empty() ? "–" : effect, error_bar, cloud_change, table1_verdict(r),
+                      r.at("paper_enrichment_mm").get<double>(), r.at("paper_visibility_mm").get<double>(),
+                      r.at("paper_difference_mm").get<double>());
   }
   for (const json& r : rows) {
     const json cloud = r.value("cloud_change", json::object());
@@ -483,8 +488,7 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
       for (std::size_t k = 0; k < studies.size(); ++k) {
         if (!studies[k].is_string() || studies[k].get<std::string>().empty())
           t.fail(fmt::format("cloud_studies/{}", k), "a sweep folder (a string, relative to the plan's folder)");
-        row.cloud_studies.push_back(
-            (std::filesystem::path(file).parent_path() / studies[k].get<std::string>()).lexically_normal().string());
+        row.cloud_studies.push_back(relative_to_plan(file, studies[k].get<std::string>()).string());
       }
     }
     t.finish();
