@@ -53,7 +53,10 @@ CloudChange cloud_change(const std::vector<std::string>& study_dirs, const Cloud
       if (fs::is_regular_file(entry.path() / "summary.json")) folders.push_back(entry.path());
     std::sort(folders.begin(), folders.end());  // the same order on every machine
     for (const fs::path& folder : folders) {
-      json run = {{"run", folder.string()}};
+      // As the reader would type it from here, however the plan's path was given (absolute or relative).
+      std::error_code ec;
+      const fs::path shown = fs::proximate(folder, ec);
+      json run = {{"run", ec ? folder.string() : shown.string()}};
       std::ifstream in(folder / "summary.json");
       const json s = json::parse(in, nullptr, false);
       if (s.is_discarded() || !s.contains("reference")) {

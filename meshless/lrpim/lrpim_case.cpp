@@ -67,6 +67,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   p.krylov_options = options.krylov_options;
   p.divergence_correction = options.divergence_correction;
   p.test_function = options.test_function;
+  p.balance_rigid_modes = options.balance_rigid_modes;
   return p;
 }
 
@@ -125,6 +126,7 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                      {"test_function", p.test_function == LrpimTestFunction::mls       ? "mls"
                                        : p.test_function == LrpimTestFunction::shepard ? "shepard"
                                                                                         : "spline"},
+                     {"balance_rigid_modes", p.balance_rigid_modes},
                      {"newton_tolerance", p.newton_tolerance},
                      {"refactor_contraction", p.refactor_contraction},
                      {"linear_solver", p.linear_solver == LrpimLinearSolver::mumps ? "MUMPS sparse LU (METIS)"
@@ -147,6 +149,10 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
                               {"support_moment_mn_m", mn(b.support_moment)},
                               {"test_weighted_applied", mn(b.test_weighted_applied)},
                               {"test_weighted_support", mn(b.test_weighted_support)}};
+    const LrpimBalanceCorrection bc = model.balance_correction();
+    d["balance_correction_mn"] = {{"active", bc.active},
+                                  {"net_force", mn(bc.net_force)},
+                                  {"net_moment_mn_m", mn(bc.net_moment)}};
   }
   d["seconds"] = {{"setup", st.setup_seconds}, {"assembly", st.assembly_seconds}, {"solve", st.solve_seconds}};
   d["factorisations"] = st.factorisations;

@@ -46,6 +46,7 @@ struct LrpimCaseOptions {
   int max_newton_iterations = 25;
   bool divergence_correction = true;  ///< LrpimProblem::divergence_correction
   LrpimTestFunction test_function = LrpimTestFunction::shepard;  ///< LrpimProblem::test_function
+  bool balance_rigid_modes = true;  ///< LrpimProblem::balance_rigid_modes
   /// Called after each converged step (optional).
   std::function<void(const LrpimStepReport&)> on_step;
 };

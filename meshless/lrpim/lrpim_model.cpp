@@ -1,6 +1,7 @@
 #include "meshless/lrpim/lrpim_model.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/LU>
 #include <Eigen/SparseLU>
 #include <algorithm>
 #include <chrono>
@@ -25,6 +26,7 @@ namespace meshless::lrpim {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
 double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
@@ -110,6 +112,34 @@ struct LrpimModel::Solver {
     if (!x.allFinite())
       throw std::runtime_error("LrpimModel '" + name + "': the linear solve gave non-finite values");
     return x;
+  }
+};
+
+// LrpimProblem::balance_rigid_modes. The rigid modes m_j(X) are e_j (j < 3) and e_{j-3} x (X - centre) / length
+// (j >= 3), so that all six multipliers are force densities [N/m^3] and all six balances forces [N]. With r(u) the
+// local equations' residual, the system is
+//   r(u) - body lambda = 0,   support u - s(t) applied = 0
+// (body: row 3i + a, column j = int v_i (m_j)_a dV over node i's sub-domain; support: row j, column 3k + a =
+// int k_s phi_k (m_j)_a dA over the elastic support; applied: int t-bar . m_j dA), the second being the body's
+// balance integrated on the rule of LrpimModel::global_balance. Newton solves it by bordering the factorised tangent
+// K: y = K^-1 r, S dlambda = support y - g with S = support K^-1 body (6 x 6), du = -y + K^-1 body dlambda.
+struct LrpimModel::RigidBalance {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  double length = 1.0;
+  Eigen::MatrixXd body;     ///< 3 #nodes by 6 [m^3]
+  Eigen::MatrixXd support;  ///< 6 by 3 #nodes [N/m]
+  Vector6d applied = Vector6d::Zero();  ///< at load scale 1 [N]
+  Vector6d lambda = Vector6d::Zero();   ///< [N/m^3]
+  Eigen::MatrixXd solved;   ///< K^-1 body for the current factors
+  Eigen::FullPivLU<Eigen::Matrix<double, 6, 6>> schur;
+
+  /// 3 by 6: column j is m_j(x).
+  Eigen::Matrix<double, 3, 6> modes(const Eigen::Vector3d& x) const {
+    Eigen::Matrix<double, 3, 6> m;
+    m.leftCols<3>().setIdentity();
+    const Eigen::Vector3d d = (x - centre) / length;
+    for (int j = 0; j < 3; ++j) m.col(3 + j) = Eigen::Vector3d::Unit(j).cross(d);
+    return m;
   }
 };
 
@@ -315,7 +345,63 @@ LrpimModel::LrpimModel(LrpimProblem problem)
   solver_->nodes = &problem_.nodes;
   solver_->krylov_options = problem_.krylov_options;
   solver_->krylov_tolerance = problem_.krylov_tolerance;
+  set_up_rigid_balance();
   statistics_.setup_seconds = seconds_since(t0);
+}
+
+void LrpimModel::set_up_rigid_balance() {
+  if (!problem_.balance_rigid_modes) return;
+  const SurfaceBody& body = *problem_.body;
+  bool supported = false;
+  for (int t = 0; t < body.num_triangles(); ++t) {
+    const FaceCondition f = condition(body.label(t));
+    if (f == FaceCondition::displacement) return;  // the constraint holds the rigid modes
+    supported = supported || f == FaceCondition::elastic_support;
+  }
+  if (!supported) return;
+  const int n = statistics_.num_nodes;
+  auto b = std::make_unique<RigidBalance>();
+  b->centre = problem_.nodes.colwise().mean().transpose();
+  b->length = std::max((problem_.nodes.rowwise() - b->centre.transpose()).rowwise().norm().maxCoeff(),
+                       problem_.node_spacing);
+  b->body = Eigen::MatrixXd::Zero(3 * n, 6);
+  parallel_for(n, 64, [&](int i) {
+    for (int q = volume_begin_[i]; q < volume_begin_[i + 1]; ++q)
+      b->body.middleRows<3>(3 * i) += volume_[q].weight * volume_[q].v * b->modes(volume_[q].x);
+  });
+  // The support and the load on global_balance()'s rule, so that its report of the balance reads what was imposed.
+  b->support = Eigen::MatrixXd::Zero(6, 3 * n);
+  const SimplexRule rule = triangle_rule(6);
+  RpimEvaluation e;
+  for (int t = 0; t < body.num_triangles(); ++t) {
+    const FaceCondition f = condition(body.label(t));
+    if (f != FaceCondition::traction && f != FaceCondition::elastic_support) continue;
+    const Eigen::Vector3d a = body.corner(t, 0), e1 = body.corner(t, 1) - a, e2 = body.corner(t, 2) - a;
+    for (int q = 0; q < rule.size(); ++q) {
+      const Eigen::Vector3d x = a + rule.points[q].x() * e1 + rule.points[q].y() * e2;
+      const double w = 2.0 * body.area(t) * rule.weights[q];  // the reference triangle's area is 1/2
+      const Eigen::Matrix<double, 6, 3> mt = b->modes(x).transpose();
+      if (f == FaceCondition::traction) {
+        b->applied += w * mt * problem_.traction(x);
+        continue;
+      }
+      rpim_.evaluate(x, false, &e);
+      const double k_s = problem_.support_stiffness(x);
+      for (int k = 0; k < e.size(); ++k) b->support.middleCols<3>(3 * e.nodes[k]) += w * k_s * e.phi[k] * mt;
+    }
+  }
+  balance_ = std::move(b);
+}
+
+LrpimBalanceCorrection LrpimModel::balance_correction() const {
+  LrpimBalanceCorrection c;
+  if (!balance_) return c;
+  c.active = true;
+  for (const LocalIntegrationPoint& p : volume_) {
+    const Eigen::Vector3d f = p.weight * p.v * (balance_->modes(p.x) * balance_->lambda);
+    c.net_force += f, c.net_moment += p.x.cross(f);
+  }
+  return c;
 }
 
 void LrpimModel::build_pattern() {
@@ -461,10 +547,19 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
     LrpimStepRecord rec;
     rec.time = t_new;
     double reference = f_ext, last = 0.0;
+    const double load = problem_.load_scale ? problem_.load_scale(t_new) : 1.0;
+    Vector6d g = Vector6d::Zero();  // the balance equations' residual (RigidBalance)
+    // The residual of the local equations (and of the balance, when it is imposed) at u_, lambda.
+    auto residual = [&](LrpimMatrix* k) {
+      assemble(t_new, dt, k, &r, &trial);
+      if (!balance_) return r.norm();
+      r -= balance_->body * balance_->lambda;
+      g = balance_->support * u_ - load * balance_->applied;
+      return std::sqrt(r.squaredNorm() + g.squaredNorm());
+    };
     for (int it = 0;; ++it) {
       auto ta = Clock::now();
-      assemble(t_new, dt, full_newton ? &tangent_ : nullptr, &r, &trial);
-      const double rn = r.norm();
+      const double rn = residual(full_newton ? &tangent_ : nullptr);
       if (it == 0) reference = std::max(reference, rn);
       rec.residual = reference > 0.0 ? rn / reference : rn;
       rec.residuals.push_back(rec.residual);
@@ -472,7 +567,7 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
       // Modified Newton: keep the factors while they contract the residual enough.
       const bool refactor = !converged && (full_newton || !solver_->factored ||
                                            (it > 0 && rn > problem_.refactor_contraction * last));
-      if (refactor && !full_newton) assemble(t_new, dt, &tangent_, &r, &trial);
+      if (refactor && !full_newton) residual(&tangent_);
       rec.assembly_seconds += seconds_since(ta);
       if (converged) break;
       if (it == problem_.max_newton_iterations) {
@@ -487,8 +582,24 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
       if (refactor) {
         solver_->factorise(tangent_);
         ++rec.factorisations;
+        if (balance_) {
+          balance_->solved.resize(3 * n, 6);
+          for (int j = 0; j < 6; ++j) balance_->solved.col(j) = solver_->solve(balance_->body.col(j));
+          balance_->schur.compute(balance_->support * balance_->solved);
+          if (!balance_->schur.isInvertible())
+            throw std::runtime_error("LrpimModel '" + problem_.name +
+                                     "': the six balance equations are singular on this tangent: the elastic "
+                                     "support does not hold every rigid motion (a support region on one line?); "
+                                     "enlarge the fixed region, or set LrpimProblem::balance_rigid_modes = false");
+        }
       }
-      u_ -= solver_->solve(r);
+      const Eigen::VectorXd y = solver_->solve(r);
+      u_ -= y;
+      if (balance_) {
+        const Vector6d dlambda = balance_->schur.solve(balance_->support * y - g);
+        u_ += balance_->solved * dlambda;
+        balance_->lambda += dlambda;
+      }
       rec.solve_seconds += seconds_since(ts);
       rec.newton_iterations = it + 1;
     }

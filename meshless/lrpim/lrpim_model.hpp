@@ -48,6 +48,15 @@ struct LrpimGlobalBalance {
                   test_weighted_support = Eigen::Vector3d::Zero();
 };
 
+/// The fictitious body force b(X) = lambda_F + lambda_M x (X - X_c) / L of LrpimProblem::balance_rigid_modes, as
+/// the local equations weight it (sum over the test nodes of int v_i b dV): what the local equations' quadrature
+/// left out of the body's balance.
+struct LrpimBalanceCorrection {
+  bool active = false;  ///< the six balance equations were imposed
+  Eigen::Vector3d net_force = Eigen::Vector3d::Zero();   ///< [N]
+  Eigen::Vector3d net_moment = Eigen::Vector3d::Zero();  ///< [N m] about the origin
+};
+
 /// Per step: what Newton did.
 struct LrpimStepRecord {
   double time = 0.0;  ///< [s]
@@ -100,11 +109,16 @@ class LrpimModel {
   void set_nodal_displacements(const Eigen::VectorXd& u) { u_ = u; }
   /// The global balance at the current state and time (LrpimGlobalBalance).
   LrpimGlobalBalance global_balance() const;
+  /// The correction that imposed it (LrpimProblem::balance_rigid_modes); inactive when it does not apply.
+  LrpimBalanceCorrection balance_correction() const;
   /// d_i per node [m]: node_spacing, or each node's own (LrpimProblem::local_spacing)
   const std::vector<double>& node_spacings() const { return spacing_; }
 
  private:
   struct Solver;
+  struct RigidBalance;
+  /// The six balance equations (LrpimProblem::balance_rigid_modes), set up when they apply.
+  void set_up_rigid_balance();
   /// R (and with k non-null the tangent's values, into the fixed pattern) at u_, time t with step dt; the
   /// points' new states into new_states. Parallel over test nodes (each owns its rows).
   void assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r,
@@ -139,6 +153,7 @@ class LrpimModel {
   std::vector<int> columns_;
   LrpimMatrix tangent_;
   std::unique_ptr<Solver> solver_;
+  std::unique_ptr<RigidBalance> balance_;  ///< null when LrpimProblem::balance_rigid_modes does not apply
   Eigen::VectorXd u_;
   double time_ = 0.0;
   double constraint_scale_ = 0.0;

@@ -83,6 +83,15 @@ struct LrpimProblem {
   bool divergence_correction = true;
   /// The test function of each node's local equations (LrpimTestFunction).
   LrpimTestFunction test_function = LrpimTestFunction::shepard;
+  /// When the body is held by elastic supports alone (no displacement face), its rigid motion is set by the six
+  /// global balance equations: the support's reaction must cancel the applied traction's net force and moment. A
+  /// Galerkin method satisfies them by construction; MLPG's local equations only to their quadrature's error, and on
+  /// the lung that error turned the body too little (docs/LRPIM.md §5). true: impose the six equations exactly, with
+  /// six multipliers lambda that scale a fictitious body force b(X) = lambda_F + lambda_M x (X - X_c) / L added to
+  /// every local equation (a bordered system). lambda is then the quadrature's imbalance, reported by
+  /// LrpimModel::balance_correction(); it vanishes where the local equations already balance. Ignored when a face
+  /// is a displacement face (the constraint holds the rigid modes) or no face is an elastic support.
+  bool balance_rigid_modes = true;
 
   /// Newton stops when ||R|| <= newton_tolerance * max(||external force at full load||, ||R|| at the step's start).
   double newton_tolerance = 1e-10;
