@@ -69,6 +69,13 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
   const core::Case stressed = core::load_case(plan.timing.config);
   EXPECT_EQ((trained.surrogate.contact_points.at(0) - stressed.load.point).norm(), 0.0);
   EXPECT_LE(*std::max_element(plan.timing.forces.begin(), plan.timing.forces.end()), trained.surrogate.max_force);
+  // Fig. 9 times the proposed model against LRPIM (the paper's comparison), beside the FEM reference.
+  EXPECT_EQ(plan.timing.models, (std::vector<std::string>{"enrichment", "lrpim"}));
+  // Table 1 has an LRPIM column: the small-deformation case runs it, the cut case says it cannot.
+  for (const auto& row : plan.table1) {
+    const auto& models = core::load_case(row.config).compare.models;
+    EXPECT_NE(std::find(models.begin(), models.end(), "lrpim"), models.end()) << row.config;
+  }
 }
 
 TEST(ReproducePlan, ASurrogateCaseTrainedElsewhereIsRefused) {
@@ -100,6 +107,12 @@ TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {
   no_folder.insert(no_folder.find("}}") + 1, ", \"cloud_studies\": [\"a\", 3]");  // in /table1/0
   const std::string cloud = error_of(write_plan("cloud", no_folder));
   EXPECT_NE(cloud.find("/table1/0/cloud_studies/1"), std::string::npos) << cloud;
+
+  std::string unknown_model = plan_text(lung, "[1.0]", "large");
+  unknown_model.insert(unknown_model.size() - 2, ", \"models\": [\"enrichment\", \"lrpm\"]");  // inside /timing
+  const std::string model = error_of(write_plan("unknown_model", unknown_model));
+  EXPECT_NE(model.find("/timing/models/1"), std::string::npos) << model;
+  EXPECT_NE(model.find("a registered model (fem, enrichment"), std::string::npos) << model;
 
   const std::string not_json = write_plan("not_json", "{\"table1\": [");
   EXPECT_NE(error_of(not_json).find("valid JSON"), std::string::npos) << error_of(not_json);

@@ -246,6 +246,14 @@ std::string table1_md(const json& rows) {
   return md;
 }
 
+/// The timing case with the plan's models (ReproducePlan::Timing::models; empty: the case's own list).
+core::Case with_timed_models(const core::Case& base, const std::vector<std::string>& models) {
+  if (models.empty()) return base;
+  json doc = base.document;
+  doc["compare"]["models"] = models;
+  return core::parse_case(doc, base.source_file);
+}
+
 /// The timing case at force magnitude `magnitude` along the case's force direction, with `steps` time steps.
 core::Case case_at_force(const core::Case& base, double magnitude, int steps) {
   json doc = base.document;
@@ -410,7 +418,8 @@ std::string timing_md(const json& timing) {
     md += "\n";
   }
   md += "\nThe ratios are measured in this run, on this machine: compare them, not the absolute seconds. The models "
-        "are the timing case's /compare list (docs/CONFIG.md), without the floor.\n";
+        "are the plan's /timing/models, or else the timing case's /compare list (docs/CONFIG.md), without the "
+        "floor.\n";
   if (measured)
     md += fmt::format(
         "\nThe surrogate (paper §3, docs/SURROGATE.md) is trained on `{}` ({:.0f} mm node spacing, {} surface "
@@ -517,6 +526,15 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
       throw core::CaseError(file, fmt::format("/timing/forces_N/{}", i), "a force magnitude in (0, 100] N");
     plan.timing.forces.push_back(forces[i].get<double>());
   }
+  if (timing.has("models")) {
+    const json& models = timing.array("models", 1, "a non-empty array of registered model names");
+    for (std::size_t k = 0; k < models.size(); ++k) {
+      if (!models[k].is_string() || !make_model(models[k].get<std::string>()))
+        timing.fail(fmt::format("models/{}", k),
+                    fmt::format("a registered model ({})", fmt::join(registered_model_names(), ", ")));
+      plan.timing.models.push_back(models[k].get<std::string>());
+    }
+  }
   timing.finish();
   root.finish();
   return plan;
@@ -535,7 +553,7 @@ int run_reproduce(const ReproduceOptions& options) {
   // Every case is read (and rejected) before anything runs.
   std::vector<core::Case> cases;
   for (const auto& t : plan.table1) cases.push_back(core::load_case(t.config));
-  const core::Case timing_case = core::load_case(plan.timing.config);
+  const core::Case timing_case = with_timed_models(core::load_case(plan.timing.config), plan.timing.models);
   if (timing_case.load.force.norm() == 0.0)
     throw core::CaseError(plan.timing.config, "/load/force", "a non-zero force (its direction is the timing's)");
   for (double f : plan.timing.forces) case_at_force(timing_case, f, plan.timing.steps);

@@ -40,6 +40,9 @@ struct ReproducePlan {
     /// A case with a /surrogate block whose contact points include the load point (resolved to a path), or
     /// empty: the surrogate is trained on it (as `tissue fit` does) and queried at each force.
     std::string surrogate_config;
+    /// The models timed (replaces the case's /compare/models; the reference is always timed), or empty: the case's
+    /// own list. So the timing can show a model that the case's other users (the CI gates) do not run.
+    std::vector<std::string> models;
   };
   std::string file;
   std::vector<Table1Case> table1;
