@@ -117,6 +117,14 @@ TEST(LrpimCase, ClampedBarMatchesTheClosedForm) {
   EXPECT_GT(run.details["points"]["reaction"].get<int>(), 0);
 }
 
+// The bar on its elastic support bent by a transverse load of a tenth of the axial one's, k = 0, one step.
+void bent_bar_case(core::Case* c, core::Geometry* g) {
+  bar_case(core::FixedRegionSpec::Support::elastic, c, g);
+  c->load.force = Eigen::Vector3d(0.0, 0.0, 0.1 * kStress * kSide * kSide);
+  c->material.k = 0.0;
+  c->time.steps = 1;
+}
+
 // The sum of all local equations against the body's balance (LrpimTestFunction, docs/LRPIM.md §5): the bar on its
 // elastic support bent by a transverse load, whose stress varies so that the clipped spheres' quadrature does not
 // integrate it exactly. With the plain spline the v_i do not sum to 1 and the support's reaction misses the load;
@@ -125,10 +133,7 @@ TEST(LrpimCase, ShepardTestFunctionsBalanceTheNetForceOfABentBar) {
   auto imbalance = [](LrpimTestFunction test, int polar) {  // of the local equations alone
     core::Case c;
     core::Geometry g;
-    bar_case(core::FixedRegionSpec::Support::elastic, &c, &g);
-    c.load.force = Eigen::Vector3d(0.0, 0.0, 0.1 * kStress * kSide * kSide);
-    c.material.k = 0.0;
-    c.time.steps = 1;
+    bent_bar_case(&c, &g);
     LrpimCaseOptions options;
     options.test_function = test;
     options.balance_rigid_modes = false;
@@ -164,10 +169,7 @@ TEST(LrpimCase, BalanceEquationsHoldTheBentBarsRigidMotion) {
   auto run_bent = [](int polar) {
     core::Case c;
     core::Geometry g;
-    bar_case(core::FixedRegionSpec::Support::elastic, &c, &g);
-    c.load.force = Eigen::Vector3d(0.0, 0.0, 0.1 * kStress * kSide * kSide);
-    c.material.k = 0.0;
-    c.time.steps = 1;
+    bent_bar_case(&c, &g);
     LrpimCaseOptions options;
     options.rule.polar = polar, options.rule.azimuthal = 2 * polar;
     options.linear_solver = LrpimLinearSolver::sparse_lu;

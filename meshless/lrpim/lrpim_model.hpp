@@ -119,6 +119,9 @@ class LrpimModel {
   struct RigidBalance;
   /// The six balance equations (LrpimProblem::balance_rigid_modes), set up when they apply.
   void set_up_rigid_balance();
+  /// Calls at(condition, X, weight) at every point of the global balance's surface rule (degree 6 per triangle) on
+  /// the traction and elastic-support faces: the rule of global_balance() and of the imposed balance alike.
+  void for_each_balance_point(const std::function<void(FaceCondition, const Eigen::Vector3d&, double)>& at) const;
   /// R (and with k non-null the tangent's values, into the fixed pattern) at u_, time t with step dt; the
   /// points' new states into new_states. Parallel over test nodes (each owns its rows).
   void assemble(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r,
