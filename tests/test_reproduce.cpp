@@ -78,6 +78,34 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
   }
 }
 
+// A Table 1 row keeps a model that could not solve its case, with its role and reason (the LRPIM on the cut case).
+// The row once iterated over a temporary copy of not_solved after its end, and README command 1 stopped with
+// "cannot use at() with null" on the first plan whose case listed such a model.
+TEST(ReproducePlan, Table1RowKeepsAModelThatCannotSolveTheCase) {
+  const nlohmann::json summary = {
+      {"models",
+       {{"enrichment",
+         {{"role", "proposed: the EFG"}, {"rmse_mm", 0.1021}, {"rmse_relative_to_peak", 0.0103},
+          {"rmse_unflagged_mm", 0.0950}, {"timings", {{"total_seconds", 201.0}}}}}}},
+      {"not_solved",
+       {{"lrpim", {{"role", "Fig. 9 baseline: LRPIM"}, {"why", "the LRPIM model has no treatment of a cut"}}},
+        {"visibility", {{"role", "baseline: the EFG with the visibility criterion"}, {"why", "failed: Newton"}}}}},
+      {"reference", {{"model", "fem"}, {"peak_sample_displacement_mm", 9.9079}, {"error_bar", {{"known", false}}}}},
+      {"flagged_samples", nlohmann::json::array()}};
+  experiments::ReproducePlan::Table1Case t;
+  t.label = "cutting";
+  const nlohmann::json row = experiments::table1_row(t, summary);
+  ASSERT_EQ(row.at("models").size(), 3u) << row.dump();
+  EXPECT_EQ(row["models"][0]["name"], "enrichment");
+  EXPECT_DOUBLE_EQ(row["models"][0]["seconds"].get<double>(), 201.0);
+  EXPECT_EQ(row["models"][1]["name"], "lrpim");
+  EXPECT_EQ(row["models"][1]["role"], "Fig. 9 baseline: LRPIM");
+  EXPECT_EQ(row["models"][1]["not_solved"], "the LRPIM model has no treatment of a cut");
+  EXPECT_EQ(row["models"][2]["name"], "visibility");
+  EXPECT_EQ(row["models"][2]["not_solved"], "failed: Newton");
+  EXPECT_EQ(experiments::table1_verdict(row), "no proposed model and baseline to compare");
+}
+
 TEST(ReproducePlan, ASurrogateCaseTrainedElsewhereIsRefused) {
   const std::string lung = std::filesystem::absolute(kConfigDir + "/lung_small.json").string();
   // configs/lung_surrogate.json with its contact point moved 30 mm from lung_small's load point

@@ -56,34 +56,6 @@ std::string resolve_case(const core::JsonReader& r, const std::string& key, cons
   return p.string();
 }
 
-/// The Table 1 RMSEs of one `tissue compare` summary.json, one entry per scored model of the case (its /compare
-/// list: a model that could not solve the case says why), with the paper's figures beside them.
-json table1_row(const ReproducePlan::Table1Case& t, const json& summary) {
-  json models = json::array();
-  for (const auto& [name, m] : summary.at("models").items())
-    models.push_back({{"name", name},
-                      {"role", m.value("role", std::string())},
-                      {"rmse_mm", m.at("rmse_mm")},
-                      {"relative", m.at("rmse_relative_to_peak")},
-                      {"unflagged_mm", m.at("rmse_unflagged_mm")},
-                      {"seconds", m.at("timings").is_object() ? m.at("timings").at("total_seconds") : json(nullptr)}});
-  for (const auto& [name, n] : summary.value("not_solved", json::object()).items())
-    models.push_back({{"name", name}, {"role", n.at("role")}, {"not_solved", n.at("why")}});
-  return {{"label", t.label},
-          {"config", t.config},
-          {"reference", summary.at("reference").at("model")},
-          {"peak_reference_mm", summary.at("reference").at("peak_sample_displacement_mm")},
-          {"models", models},
-          {"difference_mm", summary.value("difference_mm", json())},
-          {"difference_definition", summary.value("difference_definition", json())},
-          {"flagged_samples", summary.at("flagged_samples")},
-          {"reference_error_bar", summary.at("reference").at("error_bar")},
-          {"cut_effect", summary.value("cut_effect", json())},
-          {"paper_enrichment_mm", t.paper_enrichment_mm},
-          {"paper_visibility_mm", t.paper_visibility_mm},
-          {"paper_difference_mm", t.paper_enrichment_mm - t.paper_visibility_mm}};
-}
-
 std::string number_or_dash(const json& v, const char* format) {
   return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : std::string("–");
 }
@@ -121,6 +93,34 @@ CloudChange row_cloud_change(const ReproducePlan::Table1Case& t, const json& row
 }
 
 }  // namespace
+
+json table1_row(const ReproducePlan::Table1Case& t, const json& summary) {
+  json models = json::array();
+  for (const auto& [name, m] : summary.at("models").items())
+    models.push_back({{"name", name},
+                      {"role", m.value("role", std::string())},
+                      {"rmse_mm", m.at("rmse_mm")},
+                      {"relative", m.at("rmse_relative_to_peak")},
+                      {"unflagged_mm", m.at("rmse_unflagged_mm")},
+                      {"seconds", m.at("timings").is_object() ? m.at("timings").at("total_seconds") : json(nullptr)}});
+  // A named copy: a range-for over items() of the temporary that value() returns would read it after its end.
+  const json not_solved = summary.value("not_solved", json::object());
+  for (const auto& [name, n] : not_solved.items())
+    models.push_back({{"name", name}, {"role", n.at("role")}, {"not_solved", n.at("why")}});
+  return {{"label", t.label},
+          {"config", t.config},
+          {"reference", summary.at("reference").at("model")},
+          {"peak_reference_mm", summary.at("reference").at("peak_sample_displacement_mm")},
+          {"models", models},
+          {"difference_mm", summary.value("difference_mm", json())},
+          {"difference_definition", summary.value("difference_definition", json())},
+          {"flagged_samples", summary.at("flagged_samples")},
+          {"reference_error_bar", summary.at("reference").at("error_bar")},
+          {"cut_effect", summary.value("cut_effect", json())},
+          {"paper_enrichment_mm", t.paper_enrichment_mm},
+          {"paper_visibility_mm", t.paper_visibility_mm},
+          {"paper_difference_mm", t.paper_enrichment_mm - t.paper_visibility_mm}};
+}
 
 std::string table1_verdict(const json& r) {
   const json* proposed = model_with_role(r, "proposed");

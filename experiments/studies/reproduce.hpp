@@ -71,6 +71,10 @@ struct ReproduceOptions {
 /// `tissue reproduce`; returns the exit code.
 int run_reproduce(const ReproduceOptions& options);
 
+/// One row of table1.json from a `tissue compare` summary.json: one entry per scored model of the case (its /compare
+/// list; a model that could not solve the case, or whose solve failed, says why), with the paper's figures beside.
+nlohmann::json table1_row(const ReproducePlan::Table1Case& t, const nlohmann::json& summary);
+
 /// Table 1's verdict on one row of table1.json: which of the proposed model and the baseline is closer to the
 /// reference, and whether their difference stands out of the reference's error bar and the meshless model's own
 /// change between node clouds, combined as sqrt(bar^2 + change^2).
