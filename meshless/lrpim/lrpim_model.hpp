@@ -102,8 +102,9 @@ class LrpimModel {
   core::Vector6 strain_at(const Eigen::Vector3d& x) const;          ///< engineering Voigt
   const RpimShapeFunctions& shape_functions() const { return rpim_; }
   const std::vector<LocalIntegrationPoint>& volume_points() const { return volume_; }
-  /// Diagnostics: the tangent and residual at the current state for a step to `time` of length dt (the system
-  /// the first Newton iteration of that step solves), without changing the model.
+  /// Diagnostics: the local equations' tangent and residual at the current state for a step to `time` of length dt,
+  /// without changing the model. With the balance imposed (LrpimProblem::balance_rigid_modes) Newton borders this
+  /// system with the six balance equations and their multipliers, which are not in it.
   void linear_system(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r) const;
   /// Diagnostics: sets the nodal displacements (3 #nodes) [m].
   void set_nodal_displacements(const Eigen::VectorXd& u) { u_ = u; }
