@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "meshless/solvers/petsc_krylov_solver.hpp"
+#include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/available_memory.hpp"
 #include "meshless/solvers/direct_solver_estimate.hpp"
 #include "meshless/efg/efg_model.hpp"
@@ -172,6 +173,72 @@ TEST(EfgLinearSolvers, KeptFactorsGiveWayWhenTheirRateCannotReachTheToleranceInT
     refresh_work += r.linear_iterations + r.factorisations;
   }
   EXPECT_GT(refresh_work, 1);  // more than the first factorisation: a refreshed tangent was solved
+}
+
+TEST(AndersonAcceleration, SolvesALinearFixedPointInDimensionPlusOneIterations) {
+  // u <- u + M^-1 (b - A u) with M = diag(A), a stale "tangent" whose iteration contracts by about 0.6. On a
+  // linear map of dimension n, Anderson with depth >= n is GMRES in disguise (Walker & Ni 2011, Theorem 2.2):
+  // exact after n + 1 updates. Plain iteration needs tens.
+  Eigen::Matrix4d a;
+  a << 4, 1, 0.5, 0, 1, 3, 1, 0.2, 0.5, 1, 3, 1, 0, 0.2, 1, 2;
+  const Eigen::Vector4d b(1, -2, 0.5, 3);
+  const Eigen::Vector4d solution = a.partialPivLu().solve(b);
+  auto iterations_to = [&](int depth, double tolerance) {
+    AndersonAcceleration mixing(depth);
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(4);
+    for (int it = 1; it <= 200; ++it) {
+      const Eigen::VectorXd f = ((b - a * u).array() / a.diagonal().array()).matrix();
+      u += mixing.next_update(u, f);
+      if ((u - solution).norm() <= tolerance * solution.norm()) return it;
+    }
+    return 201;
+  };
+  const int plain = iterations_to(0, 1e-10), mixed = iterations_to(5, 1e-10), shallow = iterations_to(2, 1e-10);
+  std::cout << "iterations to 1e-10: plain " << plain << ", depth 2 " << shallow << ", depth 5 " << mixed << "\n";
+  EXPECT_LE(mixed, 5);    // n + 1 = 5
+  EXPECT_GE(plain, 45);   // measured 51 (depth 2: 17)
+  EXPECT_LT(shallow, plain);
+  AndersonAcceleration off(0);
+  const Eigen::VectorXd f = Eigen::VectorXd::Constant(3, 0.25);
+  EXPECT_EQ(off.next_update(Eigen::VectorXd::Zero(3), f), f);
+  EXPECT_THROW(AndersonAcceleration(-1), std::invalid_argument);
+}
+
+TEST(EfgLinearSolvers, PredictorAndAndersonMixingReachTheSameEquilibriumInFewerIterations) {
+  // k = 2, a ramp over three steps and a hold over two: the kept factors of the first tangent contract slowly
+  // (about 0.14 per iteration, the test above). The extrapolated start and the mixed updates change the path,
+  // never the equilibrium: both runs stop at Newton's tolerance, at the same parameters.
+  auto run = [](bool accelerated, int* iterations) {
+    EfgOptions options;
+    options.linear_solver = LinearSolverKind::direct;
+    options.anderson_depth = accelerated ? 5 : 0;
+    options.extrapolate_start = accelerated;
+    EfgProblem problem = sheared_box_problem(6);
+    problem.material.k = 2.0;
+    problem.step_times = {0.1, 0.2, 0.3, 0.4, 0.5};
+    problem.load_scale = [](double t) { return std::min(t / 0.3, 1.0); };
+    EfgModel model(std::move(problem), options);
+    model.setup_system();
+    *iterations = 0;
+    for (int s = 1; s <= 5; ++s) {
+      const StepRecord r = model.solve_step(s);
+      EXPECT_LE(r.residuals.back(), 1e-8) << "step " << s;
+      EXPECT_TRUE(r.retried_plain.empty()) << "step " << s;
+      EXPECT_EQ(r.cutbacks, 0) << "step " << s;
+      *iterations += r.newton_iterations;
+    }
+    return model.nodal_parameters();
+  };
+  int plain_iterations = 0, accelerated_iterations = 0;
+  const Eigen::VectorXd plain = run(false, &plain_iterations);
+  const Eigen::VectorXd accelerated = run(true, &accelerated_iterations);
+  const double difference = (accelerated - plain).norm() / plain.norm();
+  std::cout << "6^3 sheared box, k = 2, five steps: " << plain_iterations << " Newton iterations plain, "
+            << accelerated_iterations << " with the predictor and Anderson mixing; relative difference " << difference
+            << "\n";
+  EXPECT_LT(difference, 1e-8);
+  EXPECT_GE(plain_iterations, 24);        // measured 24
+  EXPECT_LE(accelerated_iterations, 20);  // measured 20
 }
 
 TEST(PetscKrylovSolver, TheOptionsStringReachesTheMultigridLevels) {

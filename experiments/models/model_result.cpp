@@ -46,14 +46,18 @@ nlohmann::json timings_json(const ModelResult& r) {
   int iterations = 0, cutbacks = 0;
   double smallest_margin = 1.0;
   nlohmann::json steps = nlohmann::json::array();
-  for (const auto& s : r.steps) {
+  auto attempts_json = [](const std::vector<core::NewtonAttempt>& list) {
     nlohmann::json attempts = nlohmann::json::array();
-    for (const core::NewtonAttempt& a : s.failed_attempts)
+    for (const core::NewtonAttempt& a : list)
       attempts.push_back({{"t_start", a.t_start},
                           {"t_end", a.t_end},
                           {"newton_iterations", a.iterations},
                           {"relative_residuals", a.residuals},
                           {"failure", a.failure}});
+    return attempts;
+  };
+  for (const auto& s : r.steps) {
+    const nlohmann::json attempts = attempts_json(s.failed_attempts);
     cutbacks += static_cast<int>(s.failed_attempts.size());
     smallest_margin = std::min(smallest_margin, s.admissibility_margin);
     assembly += s.assembly_seconds;
@@ -70,7 +74,8 @@ nlohmann::json timings_json(const ModelResult& r) {
                      {"min_one_plus_2k_lambda", s.admissibility_margin},
                      {"substeps", s.substeps},
                      {"cutbacks", static_cast<int>(s.failed_attempts.size())},
-                     {"failed_attempts", attempts}});
+                     {"failed_attempts", attempts},
+                     {"retried_plain_attempts", attempts_json(s.retried_plain)}});
   }
   j["assembly_seconds"] = assembly;
   j["solve_seconds"] = solve;

@@ -26,6 +26,9 @@ struct StepTiming {
   int substeps = 1;              ///< converged sub-steps (more than 1 after a cut-back)
   std::vector<core::NewtonAttempt> failed_attempts;  ///< Newton attempts that failed and were cut back
   double admissibility_margin = 1.0;  ///< smallest 1 + 2k lambda at the converged state (docs/MATERIAL.md)
+  /// Accelerated attempts that failed and were retried without acceleration at the same step (the EFG's
+  /// meshless::StepRecord::retried_plain); they cost time, not a cut-back.
+  std::vector<core::NewtonAttempt> retried_plain;
 };
 
 struct ModelResult {

@@ -15,6 +15,7 @@
 #include "meshless/mls/node_search.hpp"
 #include "meshless/mls/support_radii.hpp"
 #include "meshless/parallel_for.hpp"
+#include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/efg_linear_solver.hpp"
 
 namespace meshless {
@@ -116,6 +117,7 @@ void EfgModel::setup_system() {
   states_.assign(nq, core::KelvinState{});
   const int n = mesh.num_vertices();
   u_ = Eigen::VectorXd::Zero(3 * n);
+  previous_start_.reset();
   volume_incidence_ = NodeIncidence(volume_, n);
   surface_incidence_ = NodeIncidence(surface_, n);
   build_couplings(true);  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
@@ -562,6 +564,7 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   report.coupling_seconds = seconds_since(t2);
   report.seconds = seconds_since(t0);
   report.modified_nodes = cut_weights_->num_modified();
+  previous_start_.reset();  // the last step's increment was in the old cut's shape functions
   return report;
 }
 
@@ -573,6 +576,7 @@ void EfgModel::continue_from(const EfgModel& earlier) {
                                             problem_.name));
   states_ = carried_history(earlier.volume_, earlier.states_, volume_, match_points(earlier.volume_, volume_));
   u_ = earlier.u_;
+  previous_start_.reset();
   matrix_current_ = false;
 }
 
@@ -746,6 +750,53 @@ bool EfgModel::kept_factors_too_slow(double contraction, double residual_over_ta
 }
 
 core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord* rec) {
+  const Eigen::VectorXd u_start = u_;  // the committed state: restored when an attempt fails
+  const bool predicted = predict_start(t_from, t_to);
+  const bool accelerated = predicted || options_.anderson_depth > 0;
+  core::NewtonAttempt attempt = newton_iterations(t_from, t_to, u_start, accelerated, rec);
+  if (!attempt.converged() && accelerated) {
+    // The plain iteration from the committed state is the fallback: what the acceleration changes is the path,
+    // never the equilibrium, so a failure it caused must not cost a halved step. The failed attempt is kept.
+    attempt.failure = "with the predictor and Anderson mixing (EfgOptions): " + attempt.failure;
+    rec->retried_plain.push_back(attempt);
+    u_ = u_start;
+    attempt = newton_iterations(t_from, t_to, u_start, false, rec);
+  }
+  if (!attempt.converged()) return attempt;
+  // A converged state past the range is no equilibrium of the law: no step size helps, stop the run.
+  if (auto outside = inadmissible_iterate()) {
+    u_ = u_start;
+    throw core::InadmissibleStrain(*outside);
+  }
+  attempt.inadmissible = nullptr;
+  rec->residuals = attempt.residuals;
+  if (weakest_point_ >= 0) {
+    const double m = margins_[weakest_point_];
+    rec->admissibility_margin = std::min(rec->admissibility_margin, m);
+    smallest_margin_.update(m, t_to, volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_]);
+  }
+  // Commit the history (eqs. 15-16) at the converged strain of every point.
+  parallel_for(volume_.size(), 1024, [&](int q) { law_.update(states_[q], strain_[q], current_dt_, &states_[q]); });
+  previous_start_ = PreviousStep{u_start, t_from, t_to};
+  return attempt;
+}
+
+bool EfgModel::predict_start(double t_from, double t_to) {
+  if (!options_.extrapolate_start || !previous_start_ || previous_start_->u.size() != u_.size()) return false;
+  const PreviousStep& p = *previous_start_;
+  const double dt_before = p.t_to - p.t_from, dt = t_to - t_from;
+  if (!(dt_before > 0.0) || !(dt > 0.0) || std::abs(p.t_to - t_from) > 1e-9 * dt_before) return false;
+  // Extrapolate only while the load keeps its rate: at the end of a ramp the last increment is no guide.
+  const double rate_before = (problem_.load_scale(p.t_to) - problem_.load_scale(p.t_from)) / dt_before;
+  const double rate = (problem_.load_scale(t_to) - problem_.load_scale(t_from)) / dt;
+  if (std::abs(rate - rate_before) > 1e-6 * std::max({std::abs(rate), std::abs(rate_before), 1e-300})) return false;
+  u_ += (dt / dt_before) * (u_ - p.u);  // U_{n+1} ~ U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1})
+  matrix_current_ = false;
+  return true;
+}
+
+core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, const Eigen::VectorXd& u_start,
+                                                bool accelerated, StepRecord* rec) {
   core::NewtonAttempt attempt;
   attempt.t_start = t_from;
   attempt.t_end = t_to;
@@ -753,15 +804,16 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
   current_dt_ = t_to - t_from;
   external_ = boundary_.penalty_load + problem_.load_scale(t_to) * boundary_.traction_load;
   double reference = external_.norm();
-  const Eigen::VectorXd u_start = u_;  // the committed state: restored when this attempt fails
 
   // Newton with tangent reuse. A factorisation costs seconds (dense EFG rows), a back-substitution a
   // fraction of that, so the last factorised consistent tangent is kept while it still contracts the
   // residual (ratio <= options_.refactor_contraction) fast enough to reach the tolerance within the iteration
   // limit, and refreshed when it does not or when dt changed. With k = 0 the tangent depends on dt only
-  // (eq. 13: E_k = factor(dt) C0) and is exact.
+  // (eq. 13: E_k = factor(dt) C0) and is exact. On kept factors the updates are Anderson-mixed
+  // (meshless/solvers/anderson_acceleration.hpp), which restarts whenever the factors change.
   const bool constant_tangent = problem_.material.k == 0.0;
   const core::DivergenceTest diverging;
+  AndersonAcceleration mixing(accelerated ? options_.anderson_depth : 0);
   // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
   // last-bit difference must not cost a factorisation.
   auto factors_dt = [&] { return std::abs(factorised_dt_ - current_dt_) <= 1e-9 * std::abs(current_dt_); };
@@ -795,12 +847,18 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
       break;
     }
     t0 = std::chrono::steady_clock::now();
+    const Eigen::VectorXd u_before = u_;
     try {
       solve();
     } catch (const std::runtime_error& e) {
       attempt.failure = e.what();
       break;
     }
+    // Mix only updates of one fixed map: a back-substitution on the kept factors.
+    if (reuse && !last_solve_prepared_ && last_linear_iterations_ == 0)
+      u_ = u_before + mixing.next_update(u_before, u_ - u_before);
+    else
+      mixing.reset();
     rec->solve_seconds += seconds_since(t0);
     rec->linear_iterations += last_linear_iterations_;
     rec->factorisations += last_solve_prepared_;
@@ -811,22 +869,7 @@ core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord
     u_ = u_start;
     linear_solver_->forget_factors();  // factors of a failed iterate: never reuse them
     matrix_current_ = false;
-    return attempt;
   }
-  // A converged state past the range is no equilibrium of the law: no step size helps, stop the run.
-  if (auto outside = inadmissible_iterate()) {
-    u_ = u_start;
-    throw core::InadmissibleStrain(*outside);
-  }
-  attempt.inadmissible = nullptr;
-  rec->residuals = attempt.residuals;
-  if (weakest_point_ >= 0) {
-    const double m = margins_[weakest_point_];
-    rec->admissibility_margin = std::min(rec->admissibility_margin, m);
-    smallest_margin_.update(m, t_to, volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_]);
-  }
-  // Commit the history (eqs. 15-16) at the converged strain of every point.
-  parallel_for(volume_.size(), 1024, [&](int q) { law_.update(states_[q], strain_[q], current_dt_, &states_[q]); });
   return attempt;
 }
 
@@ -840,6 +883,7 @@ void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
   for (core::Vector6& e : strain_) e.setZero();
   for (core::Vector6& s : stress_) s.setZero();
   u_.setZero();
+  previous_start_.reset();
   residual_.setZero();
   external_.setZero();
   records_.clear();

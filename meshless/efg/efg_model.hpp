@@ -8,6 +8,7 @@
 #include <Eigen/Core>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "core/inadmissible_strain.hpp"
@@ -44,6 +45,8 @@ struct StepRecord {
   int substeps = 1;                        ///< converged sub-steps (more than 1 after a cut-back)
   int cutbacks = 0;                        ///< halvings of the step
   std::vector<core::NewtonAttempt> failed_attempts;  ///< the Newton attempts that failed, in order
+  /// Attempts with the predictor or Anderson mixing (EfgOptions) that failed and were retried plain, same step size.
+  std::vector<core::NewtonAttempt> retried_plain;
   double admissibility_margin = 1.0;       ///< smallest 1 + 2k lambda over the volume points at convergence
 };
 
@@ -185,6 +188,13 @@ class EfgModel {
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
   /// restores the parameters U when it fails (the attempt callback of core::advance_with_cutback).
   core::NewtonAttempt newton_step(double t_from, double t_to, StepRecord* record);
+  /// Newton from the current U (u_start: the committed state, restored on failure) to equilibrium at t_to, without
+  /// committing; `accelerated` mixes the updates on kept factors (EfgOptions::anderson_depth).
+  core::NewtonAttempt newton_iterations(double t_from, double t_to, const Eigen::VectorXd& u_start, bool accelerated,
+                                        StepRecord* record);
+  /// Move U to the extrapolated start of the step (EfgOptions::extrapolate_start) when the last converged
+  /// (sub-)step ended at t_from and the load kept its rate; false (U unchanged) otherwise.
+  bool predict_start(double t_from, double t_to);
   /// Whether the kept factors must give way to the current tangent: they contracted the residual by
   /// `contraction` in the last iteration, which is more than EfgOptions::refactor_contraction allows, or too
   /// little to take ||R|| (now `residual_over_target` times Newton's target) there by max_newton_iterations.
@@ -240,6 +250,13 @@ class EfgModel {
   int weakest_point_ = -1;        // the volume point with the smallest margin (-1: k = 0, not computed)
   core::SmallestMargin smallest_margin_;
   double factorised_dt_ = -1.0;
+  // The start and interval of the last converged (sub-)step, for predict_start; reset when U starts afresh or the
+  // cut changes the shape functions.
+  struct PreviousStep {
+    Eigen::VectorXd u;
+    double t_from = 0.0, t_to = 0.0;
+  };
+  std::optional<PreviousStep> previous_start_;
   int last_linear_iterations_ = 0;    // Krylov iterations of the last solve() (0: a back-substitution alone)
   bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the preconditioner)
   bool matrix_current_ = false;  // matrix_ matches the current iterate

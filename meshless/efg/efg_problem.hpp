@@ -51,6 +51,13 @@ struct EfgOptions {
   /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many
   /// iterations to reach iterative_tolerance. Direct solvers only; 0 always factorises. docs/MESHLESS.md §2.
   int earlier_factors_max_iterations = 30;
+  /// Anderson mixing of the updates on kept factors (meshless/solvers/anderson_acceleration.hpp): how many earlier
+  /// updates each mix uses. 0: plain iterations on the kept factors. A failed mixed attempt is retried plain
+  /// before the step is halved. docs/MESHLESS.md §2, "Anderson mixing and the predictor".
+  int anderson_depth = 5;
+  /// Start each step's Newton iteration from U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1}) instead of U_n, while the
+  /// load keeps its rate (the ramp, or the hold). Changes the path only; the converged answer is the same.
+  bool extrapolate_start = true;
   LinearSolverKind linear_solver = LinearSolverKind::automatic;
   /// > 0: the direct solver (MUMPS) factorises with block low-rank compression at this dropping tolerance
   /// (meshless/solvers/mumps_lu.hpp): an approximate LU that Newton's own test corrects, as it does the kept
