@@ -120,6 +120,8 @@ TEST(EfgLinearSolvers, GmresOnEarlierFactorsReachesTheSameEquilibriumWithFewerFa
     EfgOptions options;
     options.linear_solver = LinearSolverKind::direct;
     options.earlier_factors_max_iterations = earlier_factors_max_iterations;
+    options.anderson_depth = 0;  // the same path in both runs apart from the solver: the difference is round-off
+    options.extrapolate_start = false;
     EfgProblem problem = sheared_box_problem(6);
     problem.material.k = 2.0;
     problem.step_times = {0.0, 0.1, 0.2};
@@ -238,7 +240,7 @@ TEST(EfgLinearSolvers, PredictorAndAndersonMixingReachTheSameEquilibriumInFewerI
             << "\n";
   EXPECT_LT(difference, 1e-8);
   EXPECT_GE(plain_iterations, 24);        // measured 24
-  EXPECT_LE(accelerated_iterations, 20);  // measured 20
+  EXPECT_LE(accelerated_iterations, 19);  // measured 19
 }
 
 TEST(PetscKrylovSolver, TheOptionsStringReachesTheMultigridLevels) {

@@ -55,7 +55,8 @@ inline Eigen::Matrix<double, 3, 6> b_transpose(const Eigen::Vector3d& g) {
 EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
     : problem_(std::move(problem)),
       options_(options),
-      law_(problem_.material) {
+      law_(problem_.material),
+      mixing_(options_.anderson_depth) {
   if (!(problem_.node_spacing > 0.0))
     throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
   if (!(problem_.penalty_factor > 0.0))
@@ -118,6 +119,7 @@ void EfgModel::setup_system() {
   const int n = mesh.num_vertices();
   u_ = Eigen::VectorXd::Zero(3 * n);
   previous_start_.reset();
+  mixing_.reset();
   volume_incidence_ = NodeIncidence(volume_, n);
   surface_incidence_ = NodeIncidence(surface_, n);
   build_couplings(true);  // includes the solver's choice: an AMD ordering of the node pairs, part of the set-up cost
@@ -564,7 +566,9 @@ CutUpdate EfgModel::advance_cut(const core::RuledSurface& cut) {
   report.coupling_seconds = seconds_since(t2);
   report.seconds = seconds_since(t0);
   report.modified_nodes = cut_weights_->num_modified();
-  previous_start_.reset();  // the last step's increment was in the old cut's shape functions
+  // The last step's increment and the secant pairs were in the old cut's shape functions.
+  previous_start_.reset();
+  mixing_.reset();
   return report;
 }
 
@@ -577,6 +581,7 @@ void EfgModel::continue_from(const EfgModel& earlier) {
   states_ = carried_history(earlier.volume_, earlier.states_, volume_, match_points(earlier.volume_, volume_));
   u_ = earlier.u_;
   previous_start_.reset();
+  mixing_.reset();
   matrix_current_ = false;
 }
 
@@ -813,12 +818,16 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
   // (meshless/solvers/anderson_acceleration.hpp), which restarts whenever the factors change.
   const bool constant_tangent = problem_.material.k == 0.0;
   const core::DivergenceTest diverging;
-  AndersonAcceleration mixing(accelerated ? options_.anderson_depth : 0);
+  AndersonAcceleration unmixed(0);
+  AndersonAcceleration& mixing = accelerated ? mixing_ : unmixed;
+  mixing.start_sequence();
   // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
   // last-bit difference must not cost a factorisation.
   auto factors_dt = [&] { return std::abs(factorised_dt_ - current_dt_) <= 1e-9 * std::abs(current_dt_); };
   bool refresh = !linear_solver_->prepared() || !factors_dt();
   double previous = std::numeric_limits<double>::infinity();
+  Eigen::VectorXd u_before, plain_update;  // the last solve's iterate and its unmixed update
+  bool last_mixed = false;
   for (int it = 0;; ++it) {
     const bool reuse = !refresh && linear_solver_->prepared() && factors_dt();
     auto t0 = std::chrono::steady_clock::now();
@@ -834,6 +843,16 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
     if (reuse) rec->reused_factorisation = true;
     rec->assembly_seconds += seconds_since(t0);
     const double r = residual_.norm();
+    if (last_mixed && !(r <= previous)) {
+      // The mix raised ||R||: its secants (on the cut lung, those carried over from the last step, beside the crack
+      // front) no longer describe the tangent. Take the plain update from the same iterate instead and mix afresh
+      // from there, rather than let the rise refresh the tangent. Costs this residual.
+      u_ = u_before + plain_update;
+      mixing.reset();
+      last_mixed = false;
+      ++rec->rejected_mixes;
+      continue;
+    }
     if (!(reference > 0.0)) reference = r > 0.0 ? r : 1.0;
     attempt.residuals.push_back(r / reference);
     attempt.failure = diverging(attempt.residuals);
@@ -847,7 +866,7 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
       break;
     }
     t0 = std::chrono::steady_clock::now();
-    const Eigen::VectorXd u_before = u_;
+    u_before = u_;
     try {
       solve();
     } catch (const std::runtime_error& e) {
@@ -855,10 +874,14 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
       break;
     }
     // Mix only updates of one fixed map: a back-substitution on the kept factors.
-    if (reuse && !last_solve_prepared_ && last_linear_iterations_ == 0)
-      u_ = u_before + mixing.next_update(u_before, u_ - u_before);
-    else
+    last_mixed = reuse && !last_solve_prepared_ && last_linear_iterations_ == 0 && mixing.depth() > 0;
+    if (last_mixed) {
+      plain_update = u_ - u_before;
+      u_ = u_before + mixing.next_update(u_before, plain_update);
+      last_mixed = mixing.history() > 0;  // with no stored pair the update was the plain one
+    } else {
       mixing.reset();
+    }
     rec->solve_seconds += seconds_since(t0);
     rec->linear_iterations += last_linear_iterations_;
     rec->factorisations += last_solve_prepared_;
@@ -867,6 +890,7 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
   }
   if (!attempt.converged()) {
     u_ = u_start;
+    mixing_.reset();
     linear_solver_->forget_factors();  // factors of a failed iterate: never reuse them
     matrix_current_ = false;
   }
@@ -884,6 +908,7 @@ void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
   for (core::Vector6& s : stress_) s.setZero();
   u_.setZero();
   previous_start_.reset();
+  mixing_.reset();
   residual_.setZero();
   external_.setZero();
   records_.clear();

@@ -18,6 +18,7 @@
 #include "meshless/efg/integration_points.hpp"
 #include "meshless/efg/nodal_sparsity.hpp"
 #include "meshless/efg/penalty_boundary.hpp"
+#include "meshless/solvers/anderson_acceleration.hpp"
 
 namespace meshless {
 
@@ -45,6 +46,8 @@ struct StepRecord {
   int substeps = 1;                        ///< converged sub-steps (more than 1 after a cut-back)
   int cutbacks = 0;                        ///< halvings of the step
   std::vector<core::NewtonAttempt> failed_attempts;  ///< the Newton attempts that failed, in order
+  /// Anderson-mixed updates that raised ||R|| and were replaced by the plain update (one residual each).
+  int rejected_mixes = 0;
   /// Attempts with the predictor or Anderson mixing (EfgOptions) that failed and were retried plain, same step size.
   std::vector<core::NewtonAttempt> retried_plain;
   double admissibility_margin = 1.0;       ///< smallest 1 + 2k lambda over the volume points at convergence
@@ -257,6 +260,9 @@ class EfgModel {
     double t_from = 0.0, t_to = 0.0;
   };
   std::optional<PreviousStep> previous_start_;
+  // Anderson mixing of the updates on the kept factors, its secant pairs kept from step to step while the factors
+  // stay; reset with previous_start_ and whenever the factors change.
+  AndersonAcceleration mixing_;
   int last_linear_iterations_ = 0;    // Krylov iterations of the last solve() (0: a back-substitution alone)
   bool last_solve_prepared_ = false;  // the last solve() factorised (or set up the preconditioner)
   bool matrix_current_ = false;  // matrix_ matches the current iterate

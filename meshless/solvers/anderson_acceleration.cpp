@@ -15,6 +15,11 @@ void AndersonAcceleration::reset() {
   df_.clear();
 }
 
+void AndersonAcceleration::start_sequence() {
+  last_u_.resize(0);
+  last_f_.resize(0);
+}
+
 Eigen::VectorXd AndersonAcceleration::next_update(const Eigen::VectorXd& u, const Eigen::VectorXd& f) {
   if (u.size() != f.size()) throw std::invalid_argument("AndersonAcceleration: u and f differ in size");
   if (depth_ == 0) return f;
@@ -25,7 +30,7 @@ Eigen::VectorXd AndersonAcceleration::next_update(const Eigen::VectorXd& u, cons
       du_.pop_front();
       df_.pop_front();
     }
-  } else {
+  } else if (!du_.empty() && du_.back().size() != u.size()) {
     du_.clear();
     df_.clear();
   }

@@ -23,8 +23,13 @@ class AndersonAcceleration {
   /// next_update() then returns f unchanged.
   explicit AndersonAcceleration(int depth);
 
-  /// Forget the history: the map changed (new factors, a new step, a restored state).
+  /// Forget the history: the map changed (new factors, a restored state).
   void reset();
+  /// Start a new sequence of iterates (the next time step on the same factors) but keep the stored differences.
+  /// A pair (dU, dF) from two iterates of one step is a secant of the tangent, -K0^-1 dR = -K0^-1 K dU, which does
+  /// not depend on the step's load or history: it stays a good guide while the tangent moves slowly. No difference
+  /// is ever taken across the two sequences.
+  void start_sequence();
 
   /// The update to add to u, given the iterate u and its plain fixed-point update f = f(u):
   /// f - (dU + dF) gamma, where gamma minimises ||f - dF gamma|| over the stored differences
@@ -32,6 +37,7 @@ class AndersonAcceleration {
   /// A column that is linearly dependent on the others is dropped (the least-squares solve is rank-revealing).
   Eigen::VectorXd next_update(const Eigen::VectorXd& u, const Eigen::VectorXd& f);
 
+  int depth() const { return depth_; }
   /// Differences held now (<= depth).
   int history() const { return static_cast<int>(du_.size()); }
 
