@@ -18,6 +18,7 @@
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/support_radii.hpp"
 #include "meshless/parallel_for.hpp"
+#include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
 
@@ -545,10 +546,37 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
   Eigen::VectorXd r;
   std::vector<core::KelvinState> trial;
   const bool full_newton = !(problem_.refactor_contraction > 0.0);
+  // The unknowns of the fixed-point iteration on kept factors, u and (when imposed) the balance multipliers, as one
+  // vector for the predictor and the Anderson mixing (the EFG's, docs/MESHLESS.md §2).
+  const int n_lambda = balance_ ? 6 : 0;
+  auto unknowns = [&] {
+    Eigen::VectorXd z(3 * n + n_lambda);
+    z.head(3 * n) = u_;
+    if (balance_) z.tail(6) = balance_->lambda;
+    return z;
+  };
+  auto set_unknowns = [&](const Eigen::VectorXd& z) {
+    u_ = z.head(3 * n);
+    if (balance_) balance_->lambda = z.tail(6);
+  };
+  AndersonAcceleration mixing(full_newton ? 0 : problem_.anderson_depth);
+  std::optional<Eigen::VectorXd> previous_start;  // the unknowns at the start of the last step, at time previous_t
+  double previous_t = 0.0;
+  auto load_at = [&](double t) { return problem_.load_scale ? problem_.load_scale(t) : 1.0; };
   for (double t_new : problem_.step_times) {
     const auto t_step = Clock::now();
     const double dt = t_new - time_;
     if (dt < 0.0) throw std::invalid_argument("LrpimModel: step times must not decrease");
+    const Eigen::VectorXd z_start = unknowns();
+    // Extrapolated start while the load keeps its rate (EfgOptions::extrapolate_start explains the rule).
+    if (problem_.extrapolate_start && previous_start && dt > 0.0 && time_ > previous_t) {
+      const double dt_before = time_ - previous_t;
+      const double rate_before = (load_at(time_) - load_at(previous_t)) / dt_before;
+      const double rate = (load_at(t_new) - load_at(time_)) / dt;
+      if (std::abs(rate - rate_before) <= 1e-6 * std::max({std::abs(rate), std::abs(rate_before), 1e-300}))
+        set_unknowns(z_start + (dt / dt_before) * (z_start - *previous_start));
+    }
+    mixing.start_sequence();
     for (int i = 0; i < n; ++i)
       if (constrained_[i])
         u_.segment<3>(3 * i) = problem_.prescribed_displacement(problem_.nodes.row(i).transpose());
@@ -565,9 +593,20 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
       g = balance_->support * u_ - load * balance_->applied;
       return std::sqrt(r.squaredNorm() + g.squaredNorm());
     };
+    Eigen::VectorXd z_before, plain_update;  // the last solve's unknowns and its unmixed update
+    bool last_mixed = false;
     for (int it = 0;; ++it) {
       auto ta = Clock::now();
       const double rn = residual(full_newton ? &tangent_ : nullptr);
+      if (last_mixed && !(rn <= last)) {
+        // The mix raised ||R||: take the plain update from the same iterate (the EFG's guard, docs/MESHLESS.md §2).
+        set_unknowns(z_before + plain_update);
+        mixing.reset();
+        last_mixed = false;
+        ++rec.rejected_mixes;
+        rec.assembly_seconds += seconds_since(ta);
+        continue;
+      }
       if (it == 0) reference = std::max(reference, rn);
       rec.residual = reference > 0.0 ? rn / reference : rn;
       rec.residuals.push_back(rec.residual);
@@ -601,6 +640,7 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
                                      "enlarge the fixed region, or set LrpimProblem::balance_rigid_modes = false");
         }
       }
+      z_before = unknowns();
       const Eigen::VectorXd y = solver_->solve(r);
       u_ -= y;
       if (balance_) {
@@ -608,10 +648,21 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
         u_ += balance_->solved * dlambda;
         balance_->lambda += dlambda;
       }
+      // Mix only updates on one set of factors; a fresh factorisation restarts the mix.
+      last_mixed = false;
+      if (refactor || full_newton) {
+        mixing.reset();
+      } else if (mixing.depth() > 0) {
+        plain_update = unknowns() - z_before;
+        set_unknowns(z_before + mixing.next_update(z_before, plain_update));
+        last_mixed = mixing.history() > 0;
+      }
       rec.solve_seconds += seconds_since(ts);
       rec.newton_iterations = it + 1;
     }
     states_ = trial;
+    previous_start = z_start;
+    previous_t = time_;
     time_ = t_new;
     rec.wall_seconds = seconds_since(t_step);
     statistics_.assembly_seconds += rec.assembly_seconds;

@@ -64,6 +64,7 @@ struct LrpimStepRecord {
   double residual = 0.0;          ///< final ||R|| / reference
   std::vector<double> residuals;  ///< ||R|| / reference at every iteration (the first before any solve)
   int factorisations = 0;  ///< tangents factorised in this step (preconditioner set-ups with petsc_krylov)
+  int rejected_mixes = 0;  ///< Anderson-mixed updates that raised ||R|| and were replaced by the plain update
   double wall_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;  ///< this step's
 };
 

@@ -100,6 +100,11 @@ struct LrpimProblem {
   /// iteration reduces ||R|| by at least this ratio, and the current tangent is factorised when one does not (the
   /// EFG's rule, EfgOptions::refactor_contraction): a nearly linear case then factorises once or twice per run.
   double refactor_contraction = 0.0;
+  /// With kept factors (refactor_contraction > 0): Anderson mixing of the updates on one set of factors, and the
+  /// extrapolated start of each step while the load keeps its rate; the EFG's EfgOptions::anderson_depth and
+  /// extrapolate_start (docs/MESHLESS.md §2). Change the path to equilibrium, never the equilibrium. 0 / false: off.
+  int anderson_depth = 5;
+  bool extrapolate_start = true;
   LrpimLinearSolver linear_solver = LrpimLinearSolver::sparse_lu;
   /// petsc_krylov: PETSc options and the relative tolerance of each solve (Newton's own test decides convergence).
   std::string krylov_options = "-ksp_type gmres -ksp_gmres_restart 200 -pc_type ilu";
