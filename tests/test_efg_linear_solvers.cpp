@@ -239,8 +239,8 @@ TEST(EfgLinearSolvers, PredictorAndAndersonMixingReachTheSameEquilibriumInFewerI
             << accelerated_iterations << " with the predictor and Anderson mixing; relative difference " << difference
             << "\n";
   EXPECT_LT(difference, 1e-8);
-  EXPECT_GE(plain_iterations, 24);        // measured 24
-  EXPECT_LE(accelerated_iterations, 19);  // measured 19
+  EXPECT_GE(plain_iterations, 25);        // measured 25 (24 on the LU of the tangent itself)
+  EXPECT_LE(accelerated_iterations, 20);  // measured 20 (19 on the LU)
 }
 
 TEST(PetscKrylovSolver, TheOptionsStringReachesTheMultigridLevels) {
@@ -397,6 +397,34 @@ TEST(MumpsLu, SolvesAnUnsymmetricSystemAndReusesItsAnalysis) {
   ASSERT_FALSE(spare.isCompressed());
   lu.factorise(spare);
   EXPECT_LT((lu.solve(a * x) - x).norm(), 1e-14);
+}
+
+TEST(MumpsLu, FactorisesTheSymmetricPartOfAStructurallySymmetricMatrix) {
+  // symmetric_part: the factors are those of (A + A^T) / 2, whatever A's unsymmetric values (the EFG tangent's VCI
+  // and k != 0 parts); a pattern without its transpose is refused, naming the entry.
+  Eigen::MatrixXd dense(4, 4);
+  dense << 4, 1, 0, 0.5,  //
+      2, 5, 1, 0,         //
+      0, 3, 6, 1,         //
+      1, 0, 2, 7;
+  SparseMatrix a = dense.sparseView();
+  const Eigen::Vector4d b(1.0, -2.0, 3.0, 0.5);
+  const Eigen::Vector4d expected = (0.5 * (dense + dense.transpose())).partialPivLu().solve(b);
+  MumpsLu ldlt("4x4 symmetric part", 0.0, true);
+  ldlt.factorise(a);
+  EXPECT_LT((ldlt.solve(b) - expected).norm(), 1e-14 * expected.norm());
+  SparseMatrix spare = a;  // spare room per row, as a cut body's matrix keeps
+  spare.reserve(Eigen::VectorXi::Constant(4, 6));
+  ldlt.factorise(spare);
+  EXPECT_LT((ldlt.solve(b) - expected).norm(), 1e-14 * expected.norm());
+  MumpsLu refuses("4x4 unsymmetric pattern", 0.0, true);
+  try {
+    refuses.factorise(small_unsymmetric_matrix());
+    ADD_FAILURE() << "a pattern without its transpose was factorised";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("structurally symmetric pattern; (3, 0) has no (0, 3)"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(MumpsLu, SaysWhyItFails) {

@@ -57,6 +57,10 @@ EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
       options_(options),
       law_(problem_.material),
       mixing_(options_.anderson_depth) {
+  // With k = 0 the tangent never changes: its exact LU, factorised once, ends every step in one Newton iteration,
+  // where factors of its symmetric part would need several (and a patch test would stop at Newton's tolerance
+  // instead of round-off).
+  if (problem_.material.k == 0.0) options_.direct_symmetric_part = false;
   if (!(problem_.node_spacing > 0.0))
     throw std::invalid_argument(fmt::format("EfgModel '{}': node_spacing must be > 0", problem_.name));
   if (!(problem_.penalty_factor > 0.0))
@@ -816,7 +820,8 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
   // limit, and refreshed when it does not or when dt changed. With k = 0 the tangent depends on dt only
   // (eq. 13: E_k = factor(dt) C0) and is exact. On kept factors the updates are Anderson-mixed
   // (meshless/solvers/anderson_acceleration.hpp), which restarts whenever the factors change.
-  const bool constant_tangent = problem_.material.k == 0.0;
+  // Exact factors of a tangent that cannot change: iterate on them without watching the rate.
+  const bool constant_tangent = problem_.material.k == 0.0 && !(options_.direct_low_rank_tolerance > 0.0);
   const core::DivergenceTest diverging;
   AndersonAcceleration unmixed(0);
   AndersonAcceleration& mixing = accelerated ? mixing_ : unmixed;

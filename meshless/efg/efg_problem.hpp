@@ -63,6 +63,10 @@ struct EfgOptions {
   /// (meshless/solvers/mumps_lu.hpp): an approximate LU that Newton's own test corrects, as it does the kept
   /// factors of an older tangent. 0: the exact LU. docs/MESHLESS.md §2, "Low-rank factors".
   double direct_low_rank_tolerance = 0.0;
+  /// The direct solver (MUMPS) factorises the symmetric part (K + K^T) / 2 by LDL^T: half the work of the LU, and
+  /// factors that are exact only where K is symmetric (VCI and k != 0 make it slightly not). Newton's test corrects
+  /// the difference, as for kept factors of an older tangent. docs/MESHLESS.md §2, "Factors of the symmetric part".
+  bool direct_symmetric_part = true;
   /// automatic: factorise when the estimated peak memory of the LU (meshless/solvers/direct_solver_estimate.hpp, AMD on
   /// the node pairs) is below this fraction of the memory available when the matrix has been allocated
   /// (available_memory(): the cgroup limit, else MemAvailable); the rest is a margin for the estimate's error.

@@ -56,7 +56,7 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
   }
   switch (kind_) {
     case LinearSolverKind::direct:
-      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance);
+      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance, options.direct_symmetric_part);
       break;
     case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
     case LinearSolverKind::petsc_krylov:
@@ -92,7 +92,8 @@ std::string EfgLinearSolver::description() const {
       return options_.direct_low_rank_tolerance > 0.0
                  ? fmt::format("MUMPS block low-rank LU (METIS ordering, tolerance {:g})",
                                options_.direct_low_rank_tolerance)
-                 : std::string("MUMPS sparse LU (METIS ordering)");
+                 : options_.direct_symmetric_part ? std::string("MUMPS LDL^T of the symmetric part (METIS ordering)")
+                                                  : std::string("MUMPS sparse LU (METIS ordering)");
     case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
     case LinearSolverKind::petsc_krylov: return krylov_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";

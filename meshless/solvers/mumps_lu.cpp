@@ -1,5 +1,7 @@
 #include "meshless/solvers/mumps_lu.hpp"
 
+#include <algorithm>
+
 #include <dmumps_c.h>
 #include <fmt/format.h>
 #include <mpi.h>
@@ -77,8 +79,8 @@ struct MumpsLu::Mumps {
   }
 };
 
-MumpsLu::MumpsLu(std::string name, double low_rank_tolerance)
-    : mumps_(std::make_unique<Mumps>()), name_(std::move(name)) {
+MumpsLu::MumpsLu(std::string name, double low_rank_tolerance, bool symmetric_part)
+    : mumps_(std::make_unique<Mumps>()), name_(std::move(name)), symmetric_part_(symmetric_part) {
   if (!(low_rank_tolerance >= 0.0))
     throw std::invalid_argument(
         fmt::format("MumpsLu '{}': the low-rank tolerance must be >= 0 (0: exact LU), got {}", name_, low_rank_tolerance));
@@ -94,7 +96,9 @@ MumpsLu::MumpsLu(std::string name, double low_rank_tolerance)
   std::memset(&id, 0, sizeof id);
   id.comm_fortran = static_cast<MUMPS_INT>(MPI_Comm_c2f(MPI_COMM_SELF));
   id.par = 1;  // the host process works too (there is only one)
-  id.sym = 0;  // unsymmetric: the VCI tangent and the k != 0 tangent are not symmetric (docs/MESHLESS.md §2)
+  // Unsymmetric: the VCI tangent and the k != 0 tangent are not symmetric (docs/MESHLESS.md §2). Or LDL^T with
+  // pivoting (general symmetric, SYM = 2) of the symmetric part, about half the work.
+  id.sym = symmetric_part ? 2 : 0;
   mumps_->run(kJobInit);
   if (infog(id, 1) < 0)
     throw std::runtime_error(fmt::format("EfgModel '{}': MUMPS could not start: {}", name_, describe(id)));
@@ -127,23 +131,28 @@ void MumpsLu::factorise(const SparseMatrix& a) {
     m.columns.clear();
     m.rows.reserve(static_cast<std::size_t>(a.nonZeros()));
     m.columns.reserve(static_cast<std::size_t>(a.nonZeros()));
-  } else if (a.rows() != id.n || a.nonZeros() != static_cast<Eigen::Index>(m.rows.size())) {
+  } else if (a.rows() != id.n ||
+             a.nonZeros() != (symmetric_part_ ? analysed_entries_ : static_cast<Eigen::Index>(m.rows.size()))) {
     throw std::invalid_argument(fmt::format(
         "MumpsLu::factorise: the pattern changed ({} x {} with {} entries; analysed {} x {} with {}): make a new "
         "solver for a new pattern",
         a.rows(), a.cols(), a.nonZeros(), id.n, id.n, m.rows.size()));
   }
   // A cut body's matrix keeps spare room per row (uncompressed); walk the entries in use.
-  m.values.resize(static_cast<std::size_t>(a.nonZeros()));
-  std::size_t e = 0;
-  for (Eigen::Index i = 0; i < a.outerSize(); ++i)
-    for (SparseMatrix::InnerIterator it(a, i); it; ++it, ++e) {
-      if (first) {
-        m.rows.push_back(static_cast<MUMPS_INT>(i + 1));
-        m.columns.push_back(static_cast<MUMPS_INT>(it.index() + 1));
+  if (symmetric_part_) {
+    fill_symmetric_part(a, first);
+  } else {
+    m.values.resize(static_cast<std::size_t>(a.nonZeros()));
+    std::size_t e = 0;
+    for (Eigen::Index i = 0; i < a.outerSize(); ++i)
+      for (SparseMatrix::InnerIterator it(a, i); it; ++it, ++e) {
+        if (first) {
+          m.rows.push_back(static_cast<MUMPS_INT>(i + 1));
+          m.columns.push_back(static_cast<MUMPS_INT>(it.index() + 1));
+        }
+        m.values[e] = it.value();
       }
-      m.values[e] = it.value();
-    }
+  }
   id.n = static_cast<MUMPS_INT>(a.rows());
   id.nnz = static_cast<MUMPS_INT8>(m.values.size());
   id.irn = m.rows.data();
@@ -169,6 +178,36 @@ void MumpsLu::factorise(const SparseMatrix& a) {
   // INFOG(29) counts entries, or millions of entries when negative (it would overflow).
   factor_entries_ = infog(id, 29) >= 0 ? static_cast<double>(infog(id, 29)) : -1e6 * infog(id, 29);
   factorisation_flops_ = id.rinfog[2];
+}
+
+void MumpsLu::fill_symmetric_part(const SparseMatrix& a, bool first) {
+  Mumps& m = *mumps_;
+  // Walked afresh on every call: a matrix with spare room per row (a cut body's) may hold its entries elsewhere
+  // in its arrays from one factorisation to the next; the order of the entries in use is the analysed one.
+  m.values.clear();
+  const int* outer = a.outerIndexPtr();
+  const int* inner = a.innerIndexPtr();
+  const double* value = a.valuePtr();
+  const int* lengths = a.innerNonZeroPtr();  // null when compressed
+  auto end_of = [&](Eigen::Index i) { return lengths ? outer[i] + lengths[i] : outer[i + 1]; };
+  for (Eigen::Index i = 0; i < a.outerSize(); ++i)
+    for (Eigen::Index e = outer[i]; e < end_of(i); ++e) {
+      const Eigen::Index j = inner[e];
+      const int* begin = inner + outer[j];
+      const int* last = inner + end_of(j);
+      const int* found = std::lower_bound(begin, last, static_cast<int>(i));
+      if (found == last || *found != i)
+        throw std::invalid_argument(fmt::format(
+            "MumpsLu '{}': the symmetric part needs a structurally symmetric pattern; ({}, {}) has no ({}, {})", name_,
+            i, j, j, i));
+      if (j < i) continue;  // the upper triangle and the diagonal: MUMPS sums a symmetric matrix's given entries
+      m.values.push_back(0.5 * (value[e] + value[found - inner]));
+      if (first) {
+        m.rows.push_back(static_cast<MUMPS_INT>(i + 1));
+        m.columns.push_back(static_cast<MUMPS_INT>(j + 1));
+      }
+    }
+  if (first) analysed_entries_ = a.nonZeros();
 }
 
 Eigen::VectorXd MumpsLu::solve(const Eigen::VectorXd& b) {

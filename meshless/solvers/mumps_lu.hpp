@@ -28,7 +28,13 @@ class MumpsLu {
   /// diagonal blocks of each front are compressed to that accuracy, so the factors are approximate and solve() is
   /// accurate to about this tolerance times the condition number. 0 (the default) is the exact LU. Throws
   /// std::logic_error when MPI is not initialised, std::invalid_argument for a negative tolerance.
-  explicit MumpsLu(std::string name, double low_rank_tolerance = 0.0);
+  ///
+  /// `symmetric_part`: factorise (A + A^T) / 2 by LDL^T with pivoting (MUMPS SYM = 2) instead of A by LU, about half
+  /// the operations and the factors' memory. solve() then solves with the symmetric part: an approximate inverse of
+  /// a nearly symmetric A (the EFG tangent: VCI's test-gradient correction and, at k != 0, the law's tangent are its
+  /// only unsymmetric parts) that Newton's own test corrects, as it corrects kept factors of an older tangent. A's
+  /// pattern must be structurally symmetric (the EFG's node pairs are).
+  explicit MumpsLu(std::string name, double low_rank_tolerance = 0.0, bool symmetric_part = false);
   ~MumpsLu();
   MumpsLu(const MumpsLu&) = delete;
   MumpsLu& operator=(const MumpsLu&) = delete;
@@ -47,9 +53,15 @@ class MumpsLu {
   double factorisation_flops() const { return factorisation_flops_; }
 
  private:
+  /// The values (a_ij + a_ji) / 2 of the upper triangle and the diagonal, in the analysed order, and with `first`
+  /// their coordinates. Throws std::invalid_argument when an entry has no transposed entry.
+  void fill_symmetric_part(const SparseMatrix& a, bool first);
+
   struct Mumps;
   std::unique_ptr<Mumps> mumps_;
   std::string name_;
+  bool symmetric_part_ = false;
+  Eigen::Index analysed_entries_ = 0;  // a.nonZeros() of the analysed pattern (symmetric_part)
   double factor_entries_ = 0.0, factorisation_flops_ = 0.0;
 };
 
