@@ -17,6 +17,7 @@
 #include "meshless/parallel_for.hpp"
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/efg_linear_solver.hpp"
+#include "meshless/solvers/step_predictor.hpp"
 
 namespace meshless {
 
@@ -794,11 +795,8 @@ bool EfgModel::predict_start(double t_from, double t_to) {
   if (!options_.extrapolate_start || !previous_start_ || previous_start_->u.size() != u_.size()) return false;
   const PreviousStep& p = *previous_start_;
   const double dt_before = p.t_to - p.t_from, dt = t_to - t_from;
-  if (!(dt_before > 0.0) || !(dt > 0.0) || std::abs(p.t_to - t_from) > 1e-9 * dt_before) return false;
-  // Extrapolate only while the load keeps its rate: at the end of a ramp the last increment is no guide.
-  const double rate_before = (problem_.load_scale(p.t_to) - problem_.load_scale(p.t_from)) / dt_before;
-  const double rate = (problem_.load_scale(t_to) - problem_.load_scale(t_from)) / dt;
-  if (std::abs(rate - rate_before) > 1e-6 * std::max({std::abs(rate), std::abs(rate_before), 1e-300})) return false;
+  if (!(dt_before > 0.0) || std::abs(p.t_to - t_from) > 1e-9 * dt_before) return false;  // not the step before
+  if (!load_keeps_its_rate(problem_.load_scale, p.t_from, t_from, t_to)) return false;
   u_ += (dt / dt_before) * (u_ - p.u);  // U_{n+1} ~ U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1})
   matrix_current_ = false;
   return true;

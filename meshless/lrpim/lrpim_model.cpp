@@ -21,6 +21,7 @@
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
+#include "meshless/solvers/step_predictor.hpp"
 
 namespace meshless::lrpim {
 
@@ -562,20 +563,15 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
   AndersonAcceleration mixing(full_newton ? 0 : problem_.anderson_depth);
   std::optional<Eigen::VectorXd> previous_start;  // the unknowns at the start of the last step, at time previous_t
   double previous_t = 0.0;
-  auto load_at = [&](double t) { return problem_.load_scale ? problem_.load_scale(t) : 1.0; };
   for (double t_new : problem_.step_times) {
     const auto t_step = Clock::now();
     const double dt = t_new - time_;
     if (dt < 0.0) throw std::invalid_argument("LrpimModel: step times must not decrease");
     const Eigen::VectorXd z_start = unknowns();
     // Extrapolated start while the load keeps its rate (EfgOptions::extrapolate_start explains the rule).
-    if (problem_.extrapolate_start && previous_start && dt > 0.0 && time_ > previous_t) {
-      const double dt_before = time_ - previous_t;
-      const double rate_before = (load_at(time_) - load_at(previous_t)) / dt_before;
-      const double rate = (load_at(t_new) - load_at(time_)) / dt;
-      if (std::abs(rate - rate_before) <= 1e-6 * std::max({std::abs(rate), std::abs(rate_before), 1e-300}))
-        set_unknowns(z_start + (dt / dt_before) * (z_start - *previous_start));
-    }
+    if (problem_.extrapolate_start && previous_start &&
+        load_keeps_its_rate(problem_.load_scale, previous_t, time_, t_new))
+      set_unknowns(z_start + (dt / (time_ - previous_t)) * (z_start - *previous_start));
     mixing.start_sequence();
     for (int i = 0; i < n; ++i)
       if (constrained_[i])
