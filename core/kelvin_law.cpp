@@ -133,8 +133,8 @@ double KelvinLaw::step_modulus_factor(double dt) const {
   return g_inf + (1.0 - g_inf) * phi;
 }
 
-KelvinResponse KelvinLaw::update(const KelvinState& old_state, const Vector6& strain_new, double dt,
-                                 KelvinState* new_state) const {
+Vector6 KelvinLaw::updated_stress(const KelvinState& old_state, const Vector6& strain_new, double dt,
+                                  KelvinState* new_state) const {
   // Reject inputs that would otherwise propagate NaN silently into a global solve.
   if (!(dt >= 0.0) || !std::isfinite(dt)) {
     throw std::invalid_argument(describe("time step dt must be finite and >= 0", dt));
@@ -161,18 +161,22 @@ KelvinResponse KelvinLaw::update(const KelvinState& old_state, const Vector6& st
   const Vector6 h_new = decay * old_state.viscous_stress + (1.0 - g_inf) * phi * (C0_ * (n_new - n_old));
   const Vector6 stress = g_inf * (C0_ * n_new) + h_new;
 
-  KelvinResponse response;
-  response.stress = stress;
-  // d sigma_{n+1}/d eps_{n+1} = [g_inf + (1 - g_inf) phi] C0 dN/deps: E_k of eq. 13 including the
-  // adjustment-function Jacobian. Not symmetric when k != 0 (C0 J != J^T C0 in general).
-  response.tangent = (g_inf + (1.0 - g_inf) * phi) * (C0_ * adjusted_strain_jacobian(strain_new));
-
   if (new_state != nullptr) {
     new_state->strain = strain_new;
     new_state->adjusted_strain = n_new;
     new_state->viscous_stress = h_new;
     new_state->stress = stress;
   }
+  return stress;
+}
+
+KelvinResponse KelvinLaw::update(const KelvinState& old_state, const Vector6& strain_new, double dt,
+                                 KelvinState* new_state) const {
+  KelvinResponse response;
+  response.stress = updated_stress(old_state, strain_new, dt, new_state);
+  // d sigma_{n+1}/d eps_{n+1} = [g_inf + (1 - g_inf) phi] C0 dN/deps: E_k of eq. 13 including the
+  // adjustment-function Jacobian. Not symmetric when k != 0 (C0 J != J^T C0 in general).
+  response.tangent = step_modulus_factor(dt) * (C0_ * adjusted_strain_jacobian(strain_new));
   return response;
 }
 

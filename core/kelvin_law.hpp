@@ -75,6 +75,12 @@ class KelvinLaw {
   KelvinResponse update(const KelvinState& old_state, const Vector6& strain_new, double dt,
                         KelvinState* new_state = nullptr) const;
 
+  /// update()'s stress and history without the consistent tangent, for the residual-only evaluations of a
+  /// modified Newton iteration: the tangent (dN/deps and a 6x6 product) is most of update()'s work and would
+  /// be discarded there. Bit-identical to update().stress.
+  Vector6 updated_stress(const KelvinState& old_state, const Vector6& strain_new, double dt,
+                         KelvinState* new_state = nullptr) const;
+
  private:
   KelvinParameters parameters_;
   Matrix6 C0_;  // elastic_matrix(K1)

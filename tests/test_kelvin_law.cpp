@@ -241,6 +241,29 @@ TEST(KelvinLaw, AdjustedStrainJacobianMatchesFiniteDifferences) {
   EXPECT_NEAR(jacobian(3, 3), 1.0 + 2.5 * (strain(0) + strain(1)), 1e-14);
 }
 
+TEST(KelvinLaw, StressOnlyUpdateEqualsTheFullUpdateBitForBit) {
+  // The residual-only assemblies of modified Newton call updated_stress(); the tangent-carrying ones call
+  // update(). Both must write the same stress and history, or the two kinds of iteration would solve
+  // different equations.
+  const KelvinParameters p = make_parameters(/*nu=*/0.3, /*k=*/2.0);
+  const KelvinLaw law(p);
+  std::mt19937 rng(7);
+  KelvinState full, stress_only;
+  for (int i = 0; i < 5; ++i) {
+    const Vector6 strain = random_strain(rng, 0.08);
+    const double dt = 0.2 * (i + 1) * p.relaxation_time();
+    KelvinState next_full, next_stress_only;
+    const KelvinResponse r = law.update(full, strain, dt, &next_full);
+    const Vector6 s = law.updated_stress(stress_only, strain, dt, &next_stress_only);
+    ASSERT_TRUE(s == r.stress) << "step " << i;
+    ASSERT_TRUE(next_full.viscous_stress == next_stress_only.viscous_stress) << "step " << i;
+    ASSERT_TRUE(next_full.adjusted_strain == next_stress_only.adjusted_strain) << "step " << i;
+    ASSERT_GT(next_full.viscous_stress.norm(), 0.0);  // a history that is exercised
+    full = next_full, stress_only = next_stress_only;
+  }
+  EXPECT_THROW(law.updated_stress(full, Vector6::Constant(std::nan("")), 0.1), std::invalid_argument);
+}
+
 TEST(KelvinLaw, ConsistentTangentMatchesFiniteDifferenceOfUpdate) {
   const KelvinParameters p = make_parameters(/*nu=*/0.3, /*k=*/2.0);
   const KelvinLaw law(p);

@@ -590,8 +590,9 @@ void EfgModel::continue_from(const EfgModel& earlier) {
   matrix_current_ = false;
 }
 
-void EfgModel::update_material(double dt) {
-  // eq. 17: strain from the current parameters; eq. 13 through the shared law (one state per point).
+void EfgModel::update_material(double dt, bool with_tangent) {
+  // eq. 17: strain from the current parameters; eq. 13 through the shared law (one state per point). The
+  // tangent only when a matrix is assembled: most of the law's work, and unread by a residual-only iteration.
   const ShapeTable& t = volume_;
   const bool check_margin = problem_.material.k != 0.0;  // the margin is 1 everywhere when k = 0
   if (check_margin) margins_.resize(t.size());
@@ -611,9 +612,13 @@ void EfgModel::update_material(double dt) {
     if (!e.allFinite())
       throw std::runtime_error(fmt::format("EfgModel '{}': non-finite strain at volume point {}", problem_.name, q));
     if (check_margin) margins_[q] = law_.admissibility_margin(e);
-    const core::KelvinResponse r = law_.update(states_[q], e, dt);
-    stress_[q] = r.stress;
-    tangent_[q] = r.tangent;
+    if (with_tangent) {
+      const core::KelvinResponse r = law_.update(states_[q], e, dt);
+      stress_[q] = r.stress;
+      tangent_[q] = r.tangent;
+    } else {
+      stress_[q] = law_.updated_stress(states_[q], e, dt);
+    }
   });
   // The law's admissible range (docs/MATERIAL.md §1.5), at every point of every iterate; newton_step() decides
   // what a point past it means (core/step_cutback.hpp).
@@ -631,7 +636,7 @@ std::shared_ptr<const core::InadmissibleStrain> EfgModel::inadmissible_iterate()
 
 void EfgModel::assemble_system(bool with_matrix) {
   if (!set_up_) throw std::logic_error("EfgModel::assemble_system before setup_system");
-  update_material(current_dt_);
+  update_material(current_dt_, with_matrix);
 
   // u-bar mismatch of the penalty term needs u(X_q) = sum phi_j U_j at the penalised boundary points.
   const ShapeTable& sv = surface_;

@@ -185,7 +185,7 @@ class EfgModel {
   double divergence_defect() const { return divergence_defect_; }
 
  private:
-  void update_material(double dt);
+  void update_material(double dt, bool with_tangent);
   /// The last material update's weakest point as an error when it is outside the admissible range, else null.
   std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate() const;
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
