@@ -194,13 +194,15 @@ TEST(Lrpim, RpimShapeFunctionsReproduceLinearFieldsAndInterpolate) {
   std::cout << "RPIM (q 1.03, alpha_c 4, 20 nodes) on " << r.num_nodes << " nodes: partition " << r.max_partition_error
             << ", reproduction " << r.max_reproduction_error << ", gradient sum " << r.max_gradient_sum
             << ", gradient reproduction " << r.max_gradient_reproduction << ", Kronecker delta "
-            << r.max_kronecker_error << ", smallest rcond " << r.min_rcond << "\n";
+            << r.max_kronecker_error << ", smallest rcond " << r.min_rcond << ", smallest spread " << r.min_spread
+            << " d_c^2\n";
   EXPECT_LT(r.max_partition_error, 1e-13);        // 1.2e-15
   EXPECT_LT(r.max_reproduction_error, 1e-12);     // 1.2e-14
   EXPECT_LT(r.max_gradient_sum, 1e-13);           // 2.3e-15
   EXPECT_LT(r.max_gradient_reproduction, 1e-12);  // 3.5e-14
   EXPECT_LT(r.max_kronecker_error, 1e-11);        // 2.8e-13
   EXPECT_GT(r.min_rcond, 1e-10);                  // 4.3e-9: the flat MQ, far above min_rcond
+  EXPECT_GT(r.min_spread, 1e3 * RpimParameters{}.min_spread);  // a healthy support is far from the rank test
 }
 
 TEST(Lrpim, SingularMomentMatrixIsReportedNotNaN) {
@@ -216,11 +218,26 @@ TEST(Lrpim, SingularMomentMatrixIsReportedNotNaN) {
   } catch (const SingularRpimMatrix& e) {
     EXPECT_EQ(e.num_nodes(), 20);
     EXPECT_TRUE(e.point().isApprox(x));
-    // Here the LU's rcond estimate (printed) does not flag the exact singularity; its zero pivot gives a
-    // non-finite solve, which evaluate() reports the same way.
-    std::cout << "coplanar support: rcond estimate " << e.rcond() << "\n";
+    // The LU's rcond estimate would not flag the exact singularity (it stayed at ~1e-8); the rank test of P does,
+    // before G is factorised.
+    EXPECT_TRUE(std::isnan(e.rcond()));
+    EXPECT_LT(e.spread(), 1e-20);
     EXPECT_NE(std::string(e.what()).find("(12, 21, 0) mm"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("min_spread"), std::string::npos) << e.what();
   }
+  // Nearly coplanar: the same nodes 1e-4 d_c off the plane. The LU solves this support (rcond printed) into
+  // functions dominated by round-off; the rank test refuses it.
+  std::mt19937 gen(3);
+  std::uniform_real_distribution<double> off(-1e-6, 1e-6);
+  for (int i = 0; i < 25; ++i) nodes(i, 2) = off(gen);
+  meshless::NodeSearch near_search(nodes);
+  RpimParameters no_rank_test;
+  no_rank_test.min_spread = 0.0;
+  const RpimEvaluation unguarded = RpimShapeFunctions(nodes, near_search, 0.01, no_rank_test).evaluate(x, true);
+  std::cout << "nearly coplanar support: rcond " << unguarded.rcond << ", spread " << unguarded.spread
+            << " d_c^2, |grad phi| up to " << unguarded.dphi.cwiseAbs().maxCoeff() * 0.01 << " / d_c\n";
+  EXPECT_GT(unguarded.rcond, RpimParameters{}.min_rcond);  // the LU alone lets it through
+  EXPECT_THROW(RpimShapeFunctions(nodes, near_search, 0.01).evaluate(x, true), SingularRpimMatrix);
 }
 
 TEST(Lrpim, PatchTestPassesToRoundOffWithTheDivergenceCorrection) {

@@ -51,6 +51,7 @@ RpimInvariantReport rpim_invariants(const RpimParameters& parameters, int points
     const Eigen::Vector3d x(u(gen), u(gen), u(gen));
     rpim.evaluate(x, true, &e);
     r.min_rcond = std::min(r.min_rcond, e.rcond);
+    r.min_spread = std::min(r.min_spread, e.spread);
     double sum = 0.0;
     Eigen::Vector3d rep = Eigen::Vector3d::Zero(), gsum = Eigen::Vector3d::Zero();
     Eigen::Matrix3d grep = Eigen::Matrix3d::Zero();
@@ -280,6 +281,7 @@ nlohmann::json run_lrpim_verification(bool quick) {
         {"gradient_reproduction", inv.max_gradient_reproduction},
         {"kronecker_delta", inv.max_kronecker_error},
         {"min_rcond", inv.min_rcond},
+        {"min_spread", inv.min_spread},
         {"bounds", {{"partition", 1e-13}, {"linear_reproduction", 1e-12}, {"gradient_sum", 1e-13},
                     {"gradient_reproduction", 1e-12}, {"kronecker_delta", 1e-11}, {"min_rcond", 1e-10}}}},
        inv.max_partition_error < 1e-13 && inv.max_reproduction_error < 1e-12 && inv.max_gradient_sum < 1e-13 &&

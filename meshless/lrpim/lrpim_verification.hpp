@@ -19,6 +19,7 @@ struct RpimInvariantReport {
   double max_gradient_reproduction = 0.0;  ///< max |sum X_i (x) grad phi_i - I|
   double max_kronecker_error = 0.0;        ///< max_ij |phi_i(X_j) - delta_ij| over nodes X_j
   double min_rcond = 1.0;                  ///< smallest rcond of G met
+  double min_spread = 1.0;                 ///< smallest RpimEvaluation::spread met [d_c^2]
 };
 /// On the jittered 11^3 cloud of the EFG's invariants (spacing 10 mm, jitter 0.2), at `points` random points and
 /// at every node.

@@ -5,6 +5,7 @@
 // Methods and Their Programming", ch. 3). Unlike the EFG's MLS (meshless/mls/mls_shape_functions.hpp), these
 // functions interpolate: phi_i(X_j) = delta_ij, so essential conditions are imposed by setting nodal values.
 #include <Eigen/Core>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -23,16 +24,20 @@ class SingularRpimMatrix : public std::runtime_error {
  public:
   /// @param x evaluation point, metres (reported in mm)
   /// @param num_nodes nodes in the local support
-  /// @param rcond reciprocal condition number estimate of G (0 or NaN when the LU broke down)
-  SingularRpimMatrix(const Eigen::Vector3d& x, int num_nodes, double rcond);
+  /// @param rcond reciprocal condition number estimate of G (0 or NaN when the LU broke down; NaN when the rank
+  ///        test refused the support before G was factorised)
+  /// @param spread smallest eigenvalue of the support's coordinate covariance in units of d_c^2 (NaN: not reached)
+  SingularRpimMatrix(const Eigen::Vector3d& x, int num_nodes, double rcond, double spread = std::nan(""));
   const Eigen::Vector3d& point() const { return point_; }
   int num_nodes() const { return num_nodes_; }
   double rcond() const { return rcond_; }
+  double spread() const { return spread_; }
 
  private:
   Eigen::Vector3d point_;
   int num_nodes_;
   double rcond_;
+  double spread_;
 };
 
 /// Shape parameters. Defaults are the literature's (docs/LRPIM.md §2): Liu & Gu (2001, 2005) recommend the
@@ -45,6 +50,11 @@ struct RpimParameters {
   /// The nearly flat MQ with q = 1.03, alpha_c = 4 gives rcond ~1e-9..1e-7 on a healthy cloud
   /// (tests/test_lrpim.cpp prints it); a coplanar support gives 0 or ~1e-17.
   double min_rcond = 1e-13;
+  /// The rank test of P = [1 x y z] that the LU's rcond cannot replace (an exactly coplanar support left rcond at
+  /// ~1e-8): the support counts as (nearly) coplanar when the smallest eigenvalue of its nodes' coordinate
+  /// covariance, in units of d_c^2, is below this. P has full column rank exactly when that eigenvalue is > 0;
+  /// 20 nodes of a healthy cloud give ~0.1 (tests/test_lrpim.cpp prints the smallest met).
+  double min_spread = 1e-6;
 };
 
 /// phi(X) and grad phi(X) on the support of one point.
@@ -53,6 +63,7 @@ struct RpimEvaluation {
   Eigen::VectorXd phi;                            ///< #n, dimensionless
   Eigen::Matrix<double, 3, Eigen::Dynamic> dphi;  ///< 3 by #n [1/m]; 3 by 0 without gradients
   double rcond = 0.0;                             ///< diagnostic: rcond of G
+  double spread = 0.0;                            ///< diagnostic: RpimParameters::min_spread's measure
   int size() const { return static_cast<int>(nodes.size()); }
 };
 
