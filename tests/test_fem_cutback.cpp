@@ -117,7 +117,10 @@ TEST(FemCutback, TimingsJsonRecordsTheCutBackAndTheSmallestMargin) {
   for (const StepReport& s : f.steps)
     r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
                        s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin});
+  r.steps[1].rejected_mixes = 2;  // a meshless model's field (the FEM does not mix), written per step
   const nlohmann::json j = experiments::timings_json(r);
+  EXPECT_EQ(j["steps"][0]["rejected_mixes"], 0);
+  EXPECT_EQ(j["steps"][1]["rejected_mixes"], 2);
   EXPECT_EQ(j["cutbacks_total"], 1);
   ASSERT_EQ(j["steps"].size(), 2u);
   const nlohmann::json& first = j["steps"][0];

@@ -142,6 +142,19 @@ TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {
   EXPECT_NE(model.find("/timing/models/1"), std::string::npos) << model;
   EXPECT_NE(model.find("a registered model (fem, enrichment"), std::string::npos) << model;
 
+  std::string reference_timed = plan_text(lung, "[1.0]", "large");
+  reference_timed.insert(reference_timed.size() - 2, ", \"models\": [\"enrichment\", \"fem\"]");  // inside /timing
+  const std::string reference = error_of(write_plan("reference_timed", reference_timed));
+  EXPECT_NE(reference.find("reference_timed.json"), std::string::npos) << reference;
+  EXPECT_NE(reference.find("/timing/models/1"), std::string::npos) << reference;
+  EXPECT_NE(reference.find("a model other than the timing case's reference \"fem\""), std::string::npos) << reference;
+
+  std::string twice_timed = plan_text(lung, "[1.0]", "large");
+  twice_timed.insert(twice_timed.size() - 2, ", \"models\": [\"lrpim\", \"lrpim\"]");
+  const std::string listed_twice = error_of(write_plan("twice_timed", twice_timed));
+  EXPECT_NE(listed_twice.find("/timing/models/1"), std::string::npos) << listed_twice;
+  EXPECT_NE(listed_twice.find("listed twice"), std::string::npos) << listed_twice;
+
   const std::string not_json = write_plan("not_json", "{\"table1\": [");
   EXPECT_NE(error_of(not_json).find("valid JSON"), std::string::npos) << error_of(not_json);
 }

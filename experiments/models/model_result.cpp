@@ -75,7 +75,8 @@ nlohmann::json timings_json(const ModelResult& r) {
                      {"substeps", s.substeps},
                      {"cutbacks", static_cast<int>(s.failed_attempts.size())},
                      {"failed_attempts", attempts},
-                     {"retried_plain_attempts", attempts_json(s.retried_plain)}});
+                     {"retried_plain_attempts", attempts_json(s.retried_plain)},
+                     {"rejected_mixes", s.rejected_mixes}});
   }
   j["assembly_seconds"] = assembly;
   j["solve_seconds"] = solve;

@@ -29,6 +29,9 @@ struct StepTiming {
   /// Accelerated attempts that failed and were retried without acceleration at the same step (the EFG's
   /// meshless::StepRecord::retried_plain); they cost time, not a cut-back.
   std::vector<core::NewtonAttempt> retried_plain;
+  /// Anderson-mixed updates that raised ||R|| and were replaced by the plain update (meshless::StepRecord::
+  /// rejected_mixes, docs/MESHLESS.md §2); 0 for a model without the mixing.
+  int rejected_mixes = 0;
 };
 
 struct ModelResult {

@@ -528,11 +528,20 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
   }
   if (timing.has("models")) {
     const json& models = timing.array("models", 1, "a non-empty array of registered model names");
+    // The timing case's reference is always timed (it stands first in every row), so the list names the others;
+    // refused here, at the plan's path, rather than later at the /compare path of a case the plan rewrote.
+    const std::string reference = core::load_case(plan.timing.config).compare.reference;
     for (std::size_t k = 0; k < models.size(); ++k) {
+      const std::string at = fmt::format("models/{}", k);
       if (!models[k].is_string() || !make_model(models[k].get<std::string>()))
-        timing.fail(fmt::format("models/{}", k),
-                    fmt::format("a registered model ({})", fmt::join(registered_model_names(), ", ")));
-      plan.timing.models.push_back(models[k].get<std::string>());
+        timing.fail(at, fmt::format("a registered model ({})", fmt::join(registered_model_names(), ", ")));
+      const std::string name = models[k].get<std::string>();
+      if (name == reference)
+        timing.fail(at, fmt::format("a model other than the timing case's reference \"{}\" (the reference is always "
+                                    "timed)", name));
+      if (std::find(plan.timing.models.begin(), plan.timing.models.end(), name) != plan.timing.models.end())
+        timing.fail(at, fmt::format("each model once (\"{}\" is listed twice)", name));
+      plan.timing.models.push_back(name);
     }
   }
   timing.finish();

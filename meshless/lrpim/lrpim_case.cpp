@@ -91,6 +91,7 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
     s.newton_iterations = rec.newton_iterations;
     s.factorisations = rec.factorisations;
     s.residuals = rec.residuals;
+    s.rejected_mixes = rec.rejected_mixes;
     run.steps.push_back(s);
     if (options.on_step) options.on_step(s);
   });

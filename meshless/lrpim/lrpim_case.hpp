@@ -26,6 +26,7 @@ struct LrpimStepReport {
   int newton_iterations = 0;
   int factorisations = 0;
   std::vector<double> residuals;  ///< ||R|| / reference per iteration (LrpimProblem::newton_tolerance)
+  int rejected_mixes = 0;         ///< LrpimStepRecord::rejected_mixes
 };
 
 struct LrpimCaseOptions {

@@ -183,7 +183,7 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
     }
     r.steps.push_back({rec.step, rec.time, seconds_since(t0), rec.assembly_seconds, rec.solve_seconds,
                        rec.newton_iterations, rec.residuals, rec.linear_iterations, rec.substeps,
-                       rec.failed_attempts, rec.admissibility_margin, rec.retried_plain});
+                       rec.failed_attempts, rec.admissibility_margin, rec.retried_plain, rec.rejected_mixes});
     if (on_step)
       on_step(fmt::format("step {}/{} t = {:.3f} s: {} Newton iterations ({}), residual {:.2e}{}{}", step, n_steps,
                           rec.time, rec.newton_iterations, linear_work(rec, st), rec.residuals.back(),

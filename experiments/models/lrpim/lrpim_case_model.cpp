@@ -44,6 +44,7 @@ ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, 
     t.solve_seconds = s.solve_seconds;
     t.iterations = s.newton_iterations;
     t.residuals = s.residuals;
+    t.rejected_mixes = s.rejected_mixes;
     r.steps.push_back(t);
     r.total_seconds += s.wall_seconds;
   }
