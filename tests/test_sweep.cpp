@@ -136,6 +136,30 @@ TEST_F(Sweep, CartesianProductWithSetValuesAndStableIds) {
   EXPECT_EQ(same.size(), 1u);
 }
 
+TEST_F(Sweep, RunsOfAnStlCaseFindItsSurfaceFromTheirOwnFolder) {
+  // configs/lung_stl.json names its STL relative to itself. A run's case is written to OUT/cases/, so the path must
+  // reach it from there: absolute, also when the sweep file is named relative to the working directory.
+  json lobe = json::parse(std::ifstream(std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_stl.json"));
+  lobe["geometry"]["stl_file"] = "surfaces/lobe.stl";
+  fs::create_directories(dir_ / "configs" / "surfaces");
+  std::ofstream(dir_ / "configs" / "surfaces" / "lobe.stl") << "solid lobe\nendsolid lobe\n";
+  std::ofstream(dir_ / "configs" / "lobe.json") << lobe.dump(2);
+  std::ofstream(dir_ / "sweep.json") << json{{"name", "stl_sweep"},
+                                            {"base_case", "configs/lobe.json"},
+                                            {"parameters", {{{"pointer", "/material/k"}, {"values", {0, 1}}}}}}
+                                            .dump(2);
+  const fs::path before = fs::current_path();
+  fs::current_path(dir_);
+  const auto runs = experiments::expand_sweep(experiments::load_sweep("sweep.json"));
+  fs::current_path(before);
+  ASSERT_EQ(runs.size(), 2u);
+  for (const auto& r : runs) {
+    const fs::path stl = r.document["geometry"]["stl_file"].get<std::string>();
+    EXPECT_TRUE(stl.is_absolute()) << stl;
+    EXPECT_TRUE(fs::equivalent(stl, dir_ / "configs" / "surfaces" / "lobe.stl")) << stl;
+  }
+}
+
 TEST_F(Sweep, BadPointersAndValuesAreRejectedNamingTheFileParameterAndValue) {
   std::string m = error_of(write_sweep(json::array({{{"pointer", "meshless/node_spacing"}, {"values", {10}}}})));
   EXPECT_NE(m.find("sweep.json: /parameters/0/pointer: expected an RFC 6901 JSON pointer"), std::string::npos) << m;

@@ -96,8 +96,10 @@ json generate_case(const SweepSpec& spec, const std::vector<std::pair<std::strin
   for (const auto& [pointer, value] : spec.set) doc[json::json_pointer(pointer)] = value;
   for (const auto& [pointer, value] : assignments) doc[json::json_pointer(pointer)] = value;
   const core::Case c = core::parse_case(doc, spec.base_case_file);
-  // The generated case is written elsewhere: an STL path relative to the base case must stay valid.
-  if (c.geometry.source == core::GeometrySpec::Source::stl) doc["geometry"]["stl_file"] = c.geometry.stl_file;
+  // The generated case is written elsewhere: an STL path relative to the base case must stay valid, also when the
+  // sweep file was named relative to the working directory (the resolved path is then relative too).
+  if (c.geometry.source == core::GeometrySpec::Source::stl)
+    doc["geometry"]["stl_file"] = fs::absolute(c.geometry.stl_file).lexically_normal().string();
   return doc;
 }
 
