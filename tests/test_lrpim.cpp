@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include <random>
+#include <sstream>
 
 #include "meshless/lrpim/box_body.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
@@ -316,6 +317,31 @@ TEST(Lrpim, NodeWithoutEquationsIsNamedAtSetUp) {
   }
   // The same beam without the stray node sets up, with its 9 nodes at x = 0 held.
   EXPECT_EQ(LrpimModel(lrpim_cantilever_problem(2)).statistics().num_constrained_nodes, 9);
+}
+
+// A failed Newton solve says whether a smaller step can help: it names the set-up's worst support and the
+// divergence defect beside the CI lung's (on the real right lobe, docs/LRPIM.md §6, no step size helped).
+TEST(Lrpim, NewtonFailureReportsTheSetUpDiagnostics) {
+  LrpimProblem p = lrpim_cantilever_problem(2);
+  p.material.k = 2.0;            // nonlinear: the first update from u = 0 is the linear solution, not converged
+  p.max_newton_iterations = 1;
+  LrpimModel model(std::move(p));
+  try {
+    model.run();
+    FAIL() << "one Newton iteration cannot converge the nonlinear law";
+  } catch (const std::runtime_error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("Newton did not converge at t = "), std::string::npos) << m;
+    EXPECT_NE(m.find("rcond " + [&] {
+                std::ostringstream r;
+                r << model.statistics().min_rcond;
+                return r.str();
+              }()),
+              std::string::npos)
+        << m;
+    EXPECT_NE(m.find("divergence defect is"), std::string::npos) << m;
+    EXPECT_NE(m.find("no step size helps"), std::string::npos) << m;
+  }
 }
 
 TEST(Lrpim, CreepBarFollowsTheClosedFormAtKZero) {

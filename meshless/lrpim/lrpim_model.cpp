@@ -644,9 +644,15 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
       if (converged) break;
       if (it == problem_.max_newton_iterations) {
         std::ostringstream s;
+        // The set-up's diagnostics say whether a smaller step can help at all: on the real right lobe (docs/LRPIM.md
+        // §6) Newton failed at any step size, with the worst support at rcond 1e-12 and a defect of 0.13.
         s << "LrpimModel '" << problem_.name << "': Newton did not converge at t = " << t_new
-          << " s (relative residual " << rec.residual << " after " << it
-          << " iterations); shorten the steps or the load";
+          << " s (relative residual " << rec.residual << " after " << it << " iterations). The set-up's worst RPIM "
+          << "support has rcond " << statistics_.min_rcond << " and the local sub-domains' divergence defect is "
+          << statistics_.divergence_defect << " (the CI lung: 6.9e-10 and 0.039). When these are near the CI lung's, "
+          << "shorten the steps or lower the load; when they are far off, the local equations do not balance the "
+          << "body and no step size helps: refine the node cloud or smooth the surface where the supports are poor "
+          << "(docs/LRPIM.md §6)";
         throw std::runtime_error(s.str());
       }
       last = rn;
