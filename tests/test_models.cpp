@@ -234,6 +234,39 @@ TEST(ZeroModel, ItsRmseIsTheReferencesOwnRmsDisplacement) {
   EXPECT_NE(md.find("other (proposed): failed: Newton did not converge."), std::string::npos) << md;
 }
 
+// A load series (the Fig. 9 analogue's solves of one cloud under several forces) takes the prepared case under another
+// force, and refuses any other change with the JSON path that differs: a solve of another case on the prepared
+// set-up would be silently wrong.
+TEST(LoadSeries, TakesOtherForcesAndRefusesAnyOtherChangeWithItsPath) {
+  core::Geometry g;
+  g.sample_points.resize(2, 3);
+  g.sample_points << 0, 0, 0, 0.01, 0, 0;
+  const json doc = shipped_case();
+  const core::Case prepared = core::parse_case(doc, "lung_small.json");
+  const auto zero = experiments::make_model("zero");
+  const std::unique_ptr<experiments::LoadSeries> series = zero->prepare_load_series(prepared, g);
+  EXPECT_EQ(series->setup_seconds(), 0.0);  // the zero model sets up in each solve
+
+  json other_force = doc;
+  other_force["load"]["force"] = {0.1, 0.0, 0.0};
+  const experiments::ModelResult r = series->solve(core::parse_case(other_force, "lung_small.json"), {});
+  EXPECT_EQ(r.sample_displacements.rows(), 2);
+
+  json other_law = doc;
+  other_law["material"]["k"] = 0.5;
+  try {
+    series->solve(core::parse_case(other_law, "other.json"), {});
+    ADD_FAILURE() << "a case with another law was solved on the prepared series";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("/material/k"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("other.json"), std::string::npos) << e.what();
+  }
+  json other_point = doc;
+  other_point["load"]["point"][0] = other_point["load"]["point"][0].get<double>() + 1.0;
+  EXPECT_THROW(experiments::check_differs_only_in_force(prepared, core::parse_case(other_point, "p.json")),
+               std::invalid_argument);
+}
+
 TEST(SweepColumns, OneGroupPerScoredModelAndTheDefaultListKeepsTheDocumentedColumns) {
   const std::vector<std::string> documented{
       "n_samples",          "n_flagged",          "fem_peak_mm",       "fem_error_bar_mm",

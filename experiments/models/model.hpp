@@ -5,9 +5,11 @@
 // inside. Adding a model is one folder under experiments/models/ and one line in model_registry.cpp
 // (docs/ARCHITECTURE.md, "Adding a model").
 //
-// Lifetime and threads: a Model is a stateless recipe; solve() builds and discards the model's own state. Gmsh and the
+// Lifetime and threads: a Model is a stateless recipe; solve() builds and discards the model's own state, and a
+// LoadSeries (prepare_load_series) keeps it across solves of one cloud under several forces. Gmsh and the
 // solvers are not thread-safe, so solves run one at a time (as `tissue compare` does).
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "core/case.hpp"
@@ -23,6 +25,26 @@ struct SolveRequest {
   /// One progress line per stage (set-up, each step); may be empty.
   std::function<void(const std::string&)> on_step;
 };
+
+/// One model set up once on one case's body and cloud, then solved for loads that differ from that case only in
+/// /load/force: the Fig. 9 analogue's measure. A simulator pays its set-up (shape functions, quadrature, pattern)
+/// once per cloud, and each new force costs a solve; Model::prepare_load_series makes one. Not thread-safe; the
+/// model and the geometry it was prepared from must outlive it.
+class LoadSeries {
+ public:
+  virtual ~LoadSeries() = default;
+  /// [s] the set-up done once, by prepare_load_series; 0 when the model sets up in each solve() instead (each result's
+  /// own setup_seconds then says what it cost).
+  virtual double setup_seconds() const = 0;
+  /// Solves `c`, which must be the prepared case but for /load/force (otherwise std::invalid_argument names the first
+  /// JSON path that differs). Each solve starts from the undeformed body, as Model::solve does; the result's
+  /// setup_seconds is what this solve spent on set-up (0 after a one-off set-up).
+  virtual ModelResult solve(const core::Case& c, const SolveRequest& request) = 0;
+};
+
+/// Throws std::invalid_argument when `c`'s document differs from `prepared`'s other than at /load/force, naming the
+/// first JSON path that does (LoadSeries::solve's precondition). Cases built in code (no document) compare equal.
+void check_differs_only_in_force(const core::Case& prepared, const core::Case& c);
 
 class Model {
  public:
@@ -52,6 +74,10 @@ class Model {
   /// Solve the case on the shared geometry. The result's sample_displacements are at g.sample_points, in metres,
   /// after the last step; set-up and per-step timings are filled where the model has them.
   virtual ModelResult solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const = 0;
+
+  /// A series of solves of `c` under other forces on `g` (LoadSeries). The default sets up in each of its solves
+  /// (solve() above); a model whose set-up is a large share of a solve sets up here, once.
+  virtual std::unique_ptr<LoadSeries> prepare_load_series(const core::Case& c, const core::Geometry& g) const;
 };
 
 }  // namespace experiments

@@ -49,11 +49,10 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   } else {
     p.prescribed_displacement = [](const Eigen::Vector3d&) { return Eigen::Vector3d::Zero(); };
   }
-  const core::LoadProgram program = core::load_program(c, g.meshless_mesh);
-  const Eigen::Vector3d t = program.traction;
-  p.traction = [t](const Eigen::Vector3d&) { return t; };
-  p.load_scale = [program](double time) { return program.scale(time); };
-  p.step_times = program.step_times;
+  LrpimLoad load = lrpim_load_from_case(c, g);
+  p.traction = std::move(load.traction);
+  p.load_scale = std::move(load.load_scale);
+  p.step_times = std::move(load.step_times);
   p.material = c.material;
   p.node_spacing = c.meshless.node_spacing;
   p.rpim = options.rpim;
@@ -71,11 +70,22 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
   return p;
 }
 
-LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
-  LrpimProblem problem = lrpim_problem_from_case(c, g, options);
+LrpimLoad lrpim_load_from_case(const core::Case& c, const core::Geometry& g) {
   const core::LoadProgram program = core::load_program(c, g.meshless_mesh);
-  const double load_area = problem.body->labelled_area(static_cast<int>(core::FaceTag::load));
-  LrpimModel model(std::move(problem));
+  const Eigen::Vector3d t = program.traction;
+  return LrpimLoad{[t](const Eigen::Vector3d&) { return t; }, [program](double time) { return program.scale(time); },
+                   program.step_times};
+}
+
+LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
+  LrpimModel model(lrpim_problem_from_case(c, g, options));
+  return run_lrpim_model(model, c, g, options.on_step);
+}
+
+LrpimCaseRun run_lrpim_model(LrpimModel& model, const core::Case& c, const core::Geometry& g,
+                             const std::function<void(const LrpimStepReport&)>& on_step) {
+  const core::LoadProgram program = core::load_program(c, g.meshless_mesh);
+  const double load_area = model.problem().body->labelled_area(static_cast<int>(core::FaceTag::load));
   LrpimCaseRun run;
   const LrpimStatistics& st = model.statistics();
   run.setup_seconds = st.setup_seconds;
@@ -93,7 +103,7 @@ LrpimCaseRun run_lrpim_case(const core::Case& c, const core::Geometry& g, const 
     s.residuals = rec.residuals;
     s.rejected_mixes = rec.rejected_mixes;
     run.steps.push_back(s);
-    if (options.on_step) options.on_step(s);
+    if (on_step) on_step(s);
   });
   run.sample_displacements.resize(g.sample_points.rows(), 3);
   for (Eigen::Index i = 0; i < g.sample_points.rows(); ++i)

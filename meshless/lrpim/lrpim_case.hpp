@@ -14,6 +14,7 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include "meshless/lrpim/lrpim_model.hpp"
 #include "meshless/lrpim/lrpim_problem.hpp"
 
 namespace meshless::lrpim {
@@ -66,6 +67,17 @@ struct LrpimCaseRun {
 /// The case as an LRPIM problem (no solve). Throws core::CaseError at /cut for a cut case (the LRPIM model has no
 /// crack treatment), and what core::load_program throws (no load face on the cloud).
 LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options = {});
+
+/// The case's load on this geometry's cloud (core::load_program: the traction is the force over the cloud's
+/// load-patch area; the ramp; the step times), as LrpimModel::restart takes it. lrpim_problem_from_case uses it too.
+LrpimLoad lrpim_load_from_case(const core::Case& c, const core::Geometry& g);
+
+/// Runs `model` through its steps and reads the samples and the diagnostics. The model must have been built from
+/// lrpim_problem_from_case(c, g, ...), or since restarted under lrpim_load_from_case(c, g) for a case that differs
+/// from that one only in its load. run.setup_seconds is the model's constructor time, whether or not this run paid
+/// it. `on_step` (optional) as LrpimCaseOptions::on_step.
+LrpimCaseRun run_lrpim_model(LrpimModel& model, const core::Case& c, const core::Geometry& g,
+                             const std::function<void(const LrpimStepReport&)>& on_step = {});
 
 /// Sets up and runs the case through all of its steps; the samples are the RPIM interpolation of the nodal
 /// solution at g.sample_points. Throws core::CaseError (see above), SingularRpimMatrix, core::InadmissibleStrain,

@@ -375,16 +375,45 @@ void LrpimModel::set_up_rigid_balance() {
   b->support = Eigen::MatrixXd::Zero(6, 3 * n);
   RpimEvaluation e;
   for_each_balance_point([&](FaceCondition f, const Eigen::Vector3d& x, double w) {
+    if (f == FaceCondition::traction) return;  // integrate_balance_load()
     const Eigen::Matrix<double, 6, 3> mt = b->modes(x).transpose();
-    if (f == FaceCondition::traction) {
-      b->applied += w * mt * problem_.traction(x);
-      return;
-    }
     rpim_.evaluate(x, false, &e);
     const double k_s = problem_.support_stiffness(x);
     for (int k = 0; k < e.size(); ++k) b->support.middleCols<3>(3 * e.nodes[k]) += w * k_s * e.phi[k] * mt;
   });
   balance_ = std::move(b);
+  integrate_balance_load();
+}
+
+void LrpimModel::integrate_balance_load() {
+  if (!balance_) return;
+  balance_->applied.setZero();
+  for_each_balance_point([&](FaceCondition f, const Eigen::Vector3d& x, double w) {
+    if (f == FaceCondition::traction) balance_->applied += w * balance_->modes(x).transpose() * problem_.traction(x);
+  });
+}
+
+void LrpimModel::restart(LrpimLoad load) {
+  if (!load.traction && !traction_.empty())
+    throw std::invalid_argument("LrpimModel::restart: the body has traction faces, so the load needs a traction");
+  if (!std::is_sorted(load.step_times.begin(), load.step_times.end()))
+    throw std::invalid_argument("LrpimModel::restart: step times must not decrease");
+  problem_.traction = std::move(load.traction);
+  problem_.load_scale = std::move(load.load_scale);
+  problem_.step_times = std::move(load.step_times);
+  std::fill(states_.begin(), states_.end(), core::KelvinState{});
+  u_.setZero();
+  time_ = 0.0;
+  steps_.clear();
+  statistics_.assembly_seconds = statistics_.solve_seconds = 0.0;
+  statistics_.factorisations = 0;
+  statistics_.krylov_iterations = 0;
+  solver_->krylov_iterations = 0;
+  solver_->factored = false;  // the next step factorises its own tangent, as a new model's first step does
+  if (balance_) {
+    balance_->lambda.setZero();
+    integrate_balance_load();
+  }
 }
 
 void LrpimModel::for_each_balance_point(

@@ -68,6 +68,13 @@ struct LrpimStepRecord {
   double wall_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;  ///< this step's
 };
 
+/// The load of an LrpimProblem alone (its traction, ramp and step times): what LrpimModel::restart replaces.
+struct LrpimLoad {
+  std::function<Eigen::Vector3d(const Eigen::Vector3d&)> traction;  ///< [Pa] at full load (LrpimProblem::traction)
+  std::function<double(double)> load_scale;                         ///< LrpimProblem::load_scale
+  std::vector<double> step_times;                                   ///< [s] LrpimProblem::step_times
+};
+
 struct LrpimStatistics {
   int num_nodes = 0, num_constrained_nodes = 0;
   int num_volume_points = 0, num_reaction_points = 0, num_traction_points = 0, num_support_points = 0;
@@ -78,6 +85,7 @@ struct LrpimStatistics {
   /// max over nodes of |int v n dA - int grad v dV| * r_q / int dV before the correction (0 for an exact
   /// rule)
   double divergence_defect = 0.0;
+  /// set-up: the constructor's; assembly and solve: since the constructor or the last restart()
   double setup_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;
 };
 
@@ -91,6 +99,15 @@ class LrpimModel {
   /// Every step of problem().step_times; `on_step` (optional) is called after each converged step.
   /// @throws std::runtime_error when Newton does not converge in 25 iterations (names the step and residual)
   void run(const std::function<void(const LrpimModel&, const LrpimStepRecord&)>& on_step = {});
+
+  /// Back to the undeformed body at t = 0 under a new load on the same traction faces, keeping the set-up (the
+  /// tabulated local quadrature and RPIM functions, the tangent's pattern, the linear solver's ordering): the next
+  /// run() gives what a model constructed with this load would, bit for bit, without the constructor's cost. This
+  /// is how the Fig. 9 analogue solves one cloud for several forces (experiments::LoadSeries). The per-run
+  /// statistics (assembly, solve, factorisations, Krylov iterations) and steps() start again from zero.
+  /// @throws std::invalid_argument when the body has traction faces and load.traction is empty, or the step
+  ///         times decrease
+  void restart(LrpimLoad load);
 
   const LrpimProblem& problem() const { return problem_; }
   const LrpimStatistics& statistics() const { return statistics_; }
@@ -121,6 +138,8 @@ class LrpimModel {
   struct RigidBalance;
   /// The six balance equations (LrpimProblem::balance_rigid_modes), set up when they apply.
   void set_up_rigid_balance();
+  /// The applied traction's net force and moment on the balance's rule, at load scale 1 (RigidBalance::applied).
+  void integrate_balance_load();
   /// Calls at(condition, X, weight) at every point of the global balance's surface rule (degree 6 per triangle) on
   /// the traction and elastic-support faces: the rule of global_balance() and of the imposed balance alike.
   void for_each_balance_point(const std::function<void(FaceCondition, const Eigen::Vector3d&, double)>& at) const;

@@ -16,25 +16,35 @@ std::string LrpimCaseModel::cannot_solve(const core::Case& c) const {
                : std::string();
 }
 
-ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const {
+namespace {
+
+void report_set_up(const core::Geometry& g, const SolveRequest& request) {
   if (request.on_step)
     request.on_step(fmt::format("lrpim: set-up ({} nodes: local quadrature and RPIM tabulation)",
                                 g.meshless_mesh.num_vertices()));
-  meshless::lrpim::LrpimCaseOptions options;
-  options.on_step = [&](const meshless::lrpim::LrpimStepReport& s) {
+}
+
+/// One progress line per converged step.
+std::function<void(const meshless::lrpim::LrpimStepReport&)> step_reporter(const core::Case& c,
+                                                                          const SolveRequest& request) {
+  return [&c, &request](const meshless::lrpim::LrpimStepReport& s) {
     if (request.on_step)
       request.on_step(fmt::format("lrpim: step {}/{} t = {:.3f} s: {} Newton iterations, {} factorisations, "
                                   "residual {:.2e}",
                                   s.step, c.time.steps, s.time, s.newton_iterations, s.factorisations,
                                   s.residuals.empty() ? 0.0 : s.residuals.back()));
   };
-  const meshless::lrpim::LrpimCaseRun run = meshless::lrpim::run_lrpim_case(c, g, options);
+}
+
+/// The run as the comparator's result; `setup_seconds`: what this solve paid for set-up (0 after a one-off set-up).
+ModelResult model_result(const std::string& name, const core::Geometry& g, const meshless::lrpim::LrpimCaseRun& run,
+                         double setup_seconds) {
   ModelResult r;
-  r.model = name();
+  r.model = name;
   r.sample_points = g.sample_points;
   r.sample_displacements = run.sample_displacements;
-  r.setup_seconds = run.setup_seconds;
-  r.total_seconds = run.setup_seconds;
+  r.setup_seconds = setup_seconds;
+  r.total_seconds = setup_seconds;
   for (const auto& s : run.steps) {
     StepTiming t;
     t.step = s.step;
@@ -51,8 +61,47 @@ ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, 
   r.details = run.details;
   r.details["n_nodes"] = run.n_nodes;
   r.details["n_dofs"] = run.n_dofs;
+  r.details["model_setup_seconds"] = run.setup_seconds;  // paid by this solve, or once for a LoadSeries
   describe_samples_near_cut(g, &r);
   return r;
+}
+
+/// LrpimCaseModel's series: one meshless::lrpim::LrpimModel, restarted under each force.
+class LrpimLoadSeries final : public LoadSeries {
+ public:
+  LrpimLoadSeries(std::string name, core::Case prepared, const core::Geometry& g)
+      : name_(std::move(name)),
+        prepared_(std::move(prepared)),
+        geometry_(g),
+        model_(meshless::lrpim::lrpim_problem_from_case(prepared_, g)) {}
+  double setup_seconds() const override { return model_.statistics().setup_seconds; }
+  ModelResult solve(const core::Case& c, const SolveRequest& request) override {
+    check_differs_only_in_force(prepared_, c);
+    model_.restart(meshless::lrpim::lrpim_load_from_case(c, geometry_));
+    return model_result(name_, geometry_, meshless::lrpim::run_lrpim_model(model_, c, geometry_, step_reporter(c, request)),
+                        0.0);
+  }
+
+ private:
+  std::string name_;
+  core::Case prepared_;
+  const core::Geometry& geometry_;
+  meshless::lrpim::LrpimModel model_;
+};
+
+}  // namespace
+
+ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const {
+  report_set_up(g, request);
+  meshless::lrpim::LrpimCaseOptions options;
+  options.on_step = step_reporter(c, request);
+  const meshless::lrpim::LrpimCaseRun run = meshless::lrpim::run_lrpim_case(c, g, options);
+  return model_result(name(), g, run, run.setup_seconds);
+}
+
+std::unique_ptr<LoadSeries> LrpimCaseModel::prepare_load_series(const core::Case& c, const core::Geometry& g) const {
+  if (const std::string why = cannot_solve(c); !why.empty()) throw std::invalid_argument("lrpim: " + why);
+  return std::make_unique<LrpimLoadSeries>(name(), c, g);
 }
 
 namespace {

@@ -19,6 +19,9 @@ class LrpimCaseModel final : public Model {
   bool needs_node_cloud() const override { return true; }
   std::string cannot_solve(const core::Case& c) const override;
   ModelResult solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const override;
+  /// Sets up once (the local quadrature and the RPIM tabulation: most of a small case's solve) and restarts the
+  /// model under each force (meshless::lrpim::LrpimModel::restart).
+  std::unique_ptr<LoadSeries> prepare_load_series(const core::Case& c, const core::Geometry& g) const override;
 };
 
 /// `tissue verify lrpim`: the RPIM invariants, the patch tests, the cantilever rates and the creep bars at k = 0 and
