@@ -159,9 +159,12 @@ TEST(LrpimLung, DISABLED_AngularRuleStudyOnLungSmall) {
 // step, factorised by Eigen's SparseLU; the solution's largest nodal displacements and the tangent's smallest mode
 // (inverse iteration) are listed with what each of their nodes has: distance to the surface, nearest-neighbour
 // distance, local volume measure, the diagonal block. Environment: LRPIM_ALPHA_Q, LRPIM_NEIGHBOURS, LRPIM_ALPHA_C,
-// LRPIM_NO_DIVERGENCE_CORRECTION. Disabled: a measurement, not a test.
+// LRPIM_NO_DIVERGENCE_CORRECTION, and LRPIM_CONFIG for another case than the CI lung. Disabled: a measurement, not a
+// test.
 TEST(LrpimLung, DISABLED_FirstLinearSystemOfTheCiLung) {
-  const core::Case c = core::load_case(std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
+  const char* config = std::getenv("LRPIM_CONFIG");  // another case, e.g. configs/lung_stl_right_lobe.json
+  const core::Case c =
+      core::load_case(config ? std::string(config) : std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json");
   core::GeometryOptions geometry;
   geometry.build_fem_mesh = false;
   const core::Geometry g = core::build_geometry(c, geometry);
