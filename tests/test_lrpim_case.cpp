@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <iostream>
+#include <limits>
 
 #include "core/case.hpp"
 #include "core/case_error.hpp"
@@ -233,6 +234,33 @@ TEST(LrpimCase, RestartedModelSolvesAnotherForceAsANewModelWould) {
     }
     EXPECT_EQ(again.details["balance_correction_mn"], fresh.details["balance_correction_mn"]);
   }
+}
+
+// LrpimCaseOptions::min_node_separation (docs/LRPIM.md §6): the LRPIM's nodes keep the asked distance from each other,
+// and every node left out lies within it of a kept one, so the cloud loses no region; 0 keeps the cloud as it is.
+TEST(LrpimCase, NodeSeparationKeepsNoTwoNodesCloserThanAsked) {
+  core::Case c;
+  core::Geometry g;
+  bar_case(core::FixedRegionSpec::Support::elastic, &c, &g);
+  const core::PointMatrix& cloud = g.meshless_mesh.vertices;
+  LrpimCaseOptions options;
+  EXPECT_EQ(lrpim_problem_from_case(c, g, options).nodes, cloud);
+  options.min_node_separation = 0.9;
+  const core::PointMatrix kept = lrpim_problem_from_case(c, g, options).nodes;
+  const double d = 0.9 * c.meshless.node_spacing;
+  double closest_kept = std::numeric_limits<double>::infinity(), farthest_dropped = 0.0;
+  for (Eigen::Index i = 0; i < kept.rows(); ++i)
+    for (Eigen::Index j = i + 1; j < kept.rows(); ++j) closest_kept = std::min(closest_kept, (kept.row(i) - kept.row(j)).norm());
+  for (Eigen::Index i = 0; i < cloud.rows(); ++i) {
+    double nearest_kept = std::numeric_limits<double>::infinity();
+    for (Eigen::Index j = 0; j < kept.rows(); ++j) nearest_kept = std::min(nearest_kept, (cloud.row(i) - kept.row(j)).norm());
+    farthest_dropped = std::max(farthest_dropped, nearest_kept);
+  }
+  std::cout << "separation " << 1e3 * d << " mm: " << kept.rows() << " of " << cloud.rows() << " nodes kept, closest pair "
+            << 1e3 * closest_kept << " mm, farthest node left out " << 1e3 * farthest_dropped << " mm from a kept one\n";
+  EXPECT_LT(kept.rows(), cloud.rows());
+  EXPECT_GE(closest_kept, d);
+  EXPECT_LT(farthest_dropped, d);
 }
 
 TEST(LrpimCase, CutCaseIsRefusedWithWhatToDo) {

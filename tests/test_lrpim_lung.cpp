@@ -45,6 +45,7 @@ LrpimCaseOptions lung_options() {
   if (const char* a = std::getenv("LRPIM_ALPHA_Q")) options.alpha_q = std::atof(a);
   if (const char* a = std::getenv("LRPIM_NEIGHBOURS")) options.rpim.num_neighbours = std::atoi(a);
   if (const char* a = std::getenv("LRPIM_ALPHA_C")) options.rpim.alpha_c = std::atof(a);
+  if (const char* a = std::getenv("LRPIM_MIN_SEPARATION")) options.min_node_separation = std::atof(a);
   if (const char* a = std::getenv("LRPIM_RULE"))  // "polar,azimuthal,radial"
     std::sscanf(a, "%d,%d,%d", &options.rule.polar, &options.rule.azimuthal, &options.rule.radial);
   options.on_step = [](const LrpimStepReport& s) {
@@ -291,7 +292,8 @@ TEST(LrpimLung, DISABLED_FirstLinearSystemOfTheCiLung) {
 
 // Disabled for the same reason as the lung_small comparison above.
 TEST(LrpimLung, DISABLED_RealStlLobeRunsAndConverges) {
-  const std::string config = std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_stl.json";
+  const char* other = std::getenv("LRPIM_CONFIG");  // e.g. configs/lung_stl_right_lobe.json
+  const std::string config = other ? std::string(other) : std::string(TISSUE_TEST_CONFIG_DIR) + "/lung_stl.json";
   const core::Case c = core::load_case(config);
   if (!std::filesystem::exists(c.geometry.stl_file))
     GTEST_SKIP() << "no " << c.geometry.stl_file << " (../shared/data/lung is absent); nothing to run";
@@ -304,7 +306,7 @@ TEST(LrpimLung, DISABLED_RealStlLobeRunsAndConverges) {
   double peak = 0.0;
   for (Eigen::Index i = 0; i < run.sample_displacements.rows(); ++i) peak = std::max(peak, run.sample_displacements.row(i).norm());
   std::cout << "lung_stl: " << run.n_nodes << " nodes, largest sample displacement " << peak * 1e3 << " mm, "
-            << run.details.dump() << "\n";
+            << run.details.dump() << "\nsamples [mm]:\n" << 1e3 * run.sample_displacements << "\n";
   EXPECT_GT(peak, 0.3e-3);
   EXPECT_LT(peak, 30e-3);
   EXPECT_GT(run.sample_displacements(0, 0) * c.load.force.x(), 0.0);  // the nearest sample moves with the force

@@ -7,6 +7,7 @@
 #include "core/case_error.hpp"
 #include "core/load_program.hpp"
 #include "meshless/lrpim/lrpim_model.hpp"
+#include "meshless/mls/node_search.hpp"
 
 namespace meshless::lrpim {
 
@@ -27,6 +28,26 @@ double peak_resident_bytes() {
   return 0.0;
 }
 
+/// The rows of `nodes` that keep at least `separation` [m] from every row kept before them.
+core::PointMatrix separated_nodes(const core::PointMatrix& nodes, double separation) {
+  if (!(separation > 0.0)) return nodes;
+  const meshless::NodeSearch search(nodes);
+  std::vector<char> kept(nodes.rows(), 0);
+  std::vector<meshless::NodeHit> hits;
+  Eigen::Index count = 0;
+  for (Eigen::Index i = 0; i < nodes.rows(); ++i) {
+    search.within_radius(nodes.row(i).transpose(), separation, &hits);
+    bool keep = true;
+    for (const meshless::NodeHit& h : hits) keep = keep && !(h.node < i && kept[h.node]);
+    kept[i] = keep;
+    count += keep;
+  }
+  core::PointMatrix out(count, 3);
+  for (Eigen::Index i = 0, k = 0; i < nodes.rows(); ++i)
+    if (kept[i]) out.row(k++) = nodes.row(i);
+  return out;
+}
+
 }  // namespace
 
 LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& g, const LrpimCaseOptions& options) {
@@ -36,7 +57,7 @@ LrpimProblem lrpim_problem_from_case(const core::Case& c, const core::Geometry& 
                           "models it runs");
   LrpimProblem p;
   p.name = c.name;
-  p.nodes = g.meshless_mesh.vertices;
+  p.nodes = separated_nodes(g.meshless_mesh.vertices, options.min_node_separation * c.meshless.node_spacing);
   p.body = SurfaceBody::from_mesh_boundary(g.meshless_mesh);
   const bool elastic = c.fixed_region.support == core::FixedRegionSpec::Support::elastic;
   // Indexed by core::FaceTag: free, fixed, load, crack (a cut case is refused above).

@@ -50,6 +50,11 @@ struct LrpimCaseOptions {
   bool divergence_correction = true;  ///< LrpimProblem::divergence_correction
   LrpimTestFunction test_function = LrpimTestFunction::shepard;  ///< LrpimProblem::test_function
   bool balance_rigid_modes = true;  ///< LrpimProblem::balance_rigid_modes
+  /// Nodes of the cloud closer than this times the case's node spacing to a node kept before them (in the cloud's
+  /// order) are left out of the LRPIM's nodes; 0 keeps all. The RPIM interpolates every node it is given, and nodes
+  /// far closer than the spacing (where a region's imprint cuts an STL face near its corner) make nearly equal MQ
+  /// rows (docs/LRPIM.md §6). The body's surface and the samples are unchanged.
+  double min_node_separation = 0.0;
   /// Called after each converged step (optional).
   std::function<void(const LrpimStepReport&)> on_step;
 };
