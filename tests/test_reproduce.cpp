@@ -181,6 +181,38 @@ void write_run(const std::filesystem::path& study, const std::string& id, double
 
 // The cloud change of Table 1's cut row: the change of the difference where another cloud solved both variants, else
 // the largest change of one variant's RMSE; runs against another reference are never mixed in.
+// The Fig. 9 table: a model set up once per cloud shows its time as `= set-up once + solve`, and the ratios are given of
+// the full times and of the solves alone; a model whose set-up failed shows why in every row.
+TEST(TimingTable, ShowsTheSetUpOnceAndBothRatios) {
+  const nlohmann::json timing = {
+      {"config", "ci/lung_small_ci.json"},
+      {"steps", 1},
+      {"geometry_seconds", 2.5},
+      {"models",
+       {{{"name", "fem"}, {"role", "reference"}},
+        {{"name", "enrichment"}, {"role", "proposed: the EFG"}},
+        {{"name", "lrpim"}, {"role", "Fig. 9 baseline: LRPIM"}, {"setup_once_seconds", 12.0}},
+        {{"name", "broken"}, {"role", "baseline"}}}},
+      {"surrogate", {{"status", "not measured: the plan's /timing has no surrogate case"}}},
+      {"rows",
+       {{{"force_N", 0.1},
+         {"models",
+          {{"fem", {{"seconds", 4.0}, {"solve_seconds", 3.9}, {"setup_seconds", 0.1}, {"setup_once", false},
+                    {"newton_iterations", 3}, {"peak_sample_mm", 1.5}}},
+           {"enrichment", {{"seconds", 3.0}, {"solve_seconds", 2.5}, {"setup_seconds", 0.5}, {"setup_once", false},
+                           {"newton_iterations", 6}, {"peak_sample_mm", 1.4}}},
+           {"lrpim", {{"seconds", 18.0}, {"solve_seconds", 6.0}, {"setup_seconds", 12.0}, {"setup_once", true},
+                      {"newton_iterations", 7}, {"peak_sample_mm", 1.45}}},
+           {"broken", {{"error", "set-up: singular"}}}}}}}}};
+  const std::string md = experiments::timing_md(timing);
+  EXPECT_NE(md.find("| 18.00 s = 12.00 s set-up once + 6.00 s (7 Newton, peak 1.450 mm) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 3.00 s (6 Newton, peak 1.400 mm) |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| lrpim / enrichment | lrpim / enrichment, solves |"), std::string::npos) << md;
+  // enrichment / fem 0.75; lrpim / enrichment 6.00 in full and 2.40 in solves; the failed model's ratios are dashes.
+  EXPECT_NE(md.find("| 0.75 | 6.00 | 2.40 | – | – |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| failed: set-up: singular |"), std::string::npos) << md;
+}
+
 TEST(CloudChange, TakesTheDifferenceWhereBothSolvedElseOneModelsRmse) {
   const auto root = std::filesystem::temp_directory_path() / "tissue_cloud_change";
   std::filesystem::remove_all(root);

@@ -383,6 +383,24 @@ std::string seconds_ratio(const json& a, const json& b, const std::string& key =
              : std::string("–");
 }
 
+void plot_timing(const core::OutputDirectory& out, json* timing) {
+  const std::string log = out.file("plot_timing.log").string();
+  const ProcessOutcome p = run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_timing.py",
+                                        out.file("timing.json").string(), out.file("timing.png").string()},
+                                       log);
+  if (p.ok()) {
+    std::filesystem::remove(log);
+    (*timing)["timing_png"] = "timing.png";
+    return;
+  }
+  std::filesystem::remove(out.file("timing.png"));
+  std::cerr << "warning: timing.png not written (" << p.error << "); see plot_timing.log\n";
+  (*timing)["timing_png"] = nullptr;
+  (*timing)["plot_error"] = p.error;
+}
+
+}  // namespace
+
 std::string timing_md(const json& timing) {
   const json& models = timing.at("models");
   std::string proposed, reference;  // the ratio columns' models: the first of each role
@@ -459,24 +477,6 @@ std::string timing_md(const json& timing) {
         surrogate.at("training_seconds").get<double>(), surrogate.at("queries_per_force").get<int>());
   return md;
 }
-
-void plot_timing(const core::OutputDirectory& out, json* timing) {
-  const std::string log = out.file("plot_timing.log").string();
-  const ProcessOutcome p = run_process({plot_python(), std::string(TISSUE_SOURCE_DIR) + "/scripts/plot_timing.py",
-                                        out.file("timing.json").string(), out.file("timing.png").string()},
-                                       log);
-  if (p.ok()) {
-    std::filesystem::remove(log);
-    (*timing)["timing_png"] = "timing.png";
-    return;
-  }
-  std::filesystem::remove(out.file("timing.png"));
-  std::cerr << "warning: timing.png not written (" << p.error << "); see plot_timing.log\n";
-  (*timing)["timing_png"] = nullptr;
-  (*timing)["plot_error"] = p.error;
-}
-
-}  // namespace
 
 json surrogate_query_timing(const meshless::Surrogate& surrogate, const Eigen::Vector3d& point,
                             const Eigen::Vector3d& direction, const std::vector<double>& forces, int queries) {

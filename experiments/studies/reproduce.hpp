@@ -71,6 +71,11 @@ struct ReproduceOptions {
 /// `tissue reproduce`; returns the exit code.
 int run_reproduce(const ReproduceOptions& options);
 
+/// timing.md from timing.json: per force each timed model's time for one result (`= set-up once + solve` for a model
+/// set up once per cloud, Model::prepare_load_series), the ratios of the full times and of the solves alone, and the
+/// surrogate's query.
+std::string timing_md(const nlohmann::json& timing);
+
 /// One row of table1.json from a `tissue compare` summary.json: one entry per scored model of the case (its /compare
 /// list; a model that could not solve the case, or whose solve failed, says why), with the paper's figures beside.
 nlohmann::json table1_row(const ReproducePlan::Table1Case& t, const nlohmann::json& summary);
