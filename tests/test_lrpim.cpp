@@ -5,6 +5,10 @@
 // values reached (printed), so a lost digit or order fails.
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
+#include <functional>
+
 #include <cmath>
 #include <iostream>
 
@@ -301,6 +305,53 @@ TEST(Lrpim, CantileverConvergesTowardsTimoshenko) {
 // A free node with no sub-domain inside the body would carry an empty row, which the factorisation reports only as a
 // "zero column" of its permuted matrix (how a lost clamp mark showed in CI, when the set-up kept its per-node flags
 // as bits that two threads could overwrite). The set-up names the node instead.
+// Why the cantilever's energy rate (1.20) falls short of the EFG's (1.42), docs/LRPIM.md §4: the rates over 2, 3 and 4
+// cells with one ingredient changed at a time. Disabled: a measurement, not a test (about 3 minutes).
+TEST(Lrpim, DISABLED_CantileverRateStudy) {
+  struct Variant {
+    std::string name;
+    std::function<void(LrpimProblem*)> adjust;
+    RpimParameters rpim;
+    double alpha_q = 1.5;
+  };
+  RpimParameters thirty, full_shells, broken_shell;
+  thirty.num_neighbours = 30;
+  full_shells.num_neighbours = 27;  // the node and its 6, 12 and 8 neighbours at h, sqrt(2) h, sqrt(3) h on the grid
+  broken_shell.num_neighbours = 23;  // 4 of the 8 at sqrt(3) h: a tie broken arbitrarily, as 20 breaks the 12 at sqrt(2) h
+  const char* only = std::getenv("LRPIM_STUDY_ONLY");  // a substring of the variants' names
+  std::vector<Variant> variants = {
+      {"shipped (8 x 16 x 4, alpha_q 1.5, 20 nodes)", {}, {}, 1.5},
+      {"angular rule 16 x 32 x 8", [](LrpimProblem* p) { p->rule.polar = 16, p->rule.azimuthal = 32, p->rule.radial = 8; }, {}, 1.5},
+      {"alpha_q 1.0", {}, {}, 1.0},
+      {"alpha_q 2.0", {}, {}, 2.0},
+      {"30 support nodes", {}, thirty, 1.5},
+      {"27 support nodes (complete shells)", {}, full_shells, 1.5},
+      {"23 support nodes", {}, broken_shell, 1.5},
+      {"spline test function", [](LrpimProblem* p) { p->test_function = LrpimTestFunction::spline; }, {}, 1.5},
+  };
+  for (const Variant& v : variants) {
+    if (only && v.name.find(only) == std::string::npos) continue;
+    std::vector<double> h, l2, en;
+    std::ostringstream line;
+    for (int nd : {2, 3, 4}) {
+      const LrpimCantileverReport r = run_lrpim_cantilever(nd, v.rpim, v.alpha_q, v.adjust);
+      h.push_back(r.node_spacing), l2.push_back(r.l2_error), en.push_back(r.energy_error);
+      line << "  " << nd << " cells: L2 " << r.l2_error << ", energy " << r.energy_error << ", tip "
+           << r.tip_deflection / r.exact_tip_deflection << "\n";
+    }
+    auto rate = [&](const std::vector<double>& e) {  // least squares of log e against log h
+      double sx = 0, sy = 0, sxx = 0, sxy = 0;
+      for (std::size_t i = 0; i < h.size(); ++i) {
+        const double x = std::log(h[i]), y = std::log(e[i]);
+        sx += x, sy += y, sxx += x * x, sxy += x * y;
+      }
+      const double n = static_cast<double>(h.size());
+      return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+    };
+    std::cout << v.name << ": rates L2 " << rate(l2) << ", energy " << rate(en) << "\n" << line.str() << std::flush;
+  }
+}
+
 TEST(Lrpim, NodeWithoutEquationsIsNamedAtSetUp) {
   LrpimProblem p = lrpim_cantilever_problem(2);
   const Eigen::Index n = p.nodes.rows();

@@ -176,10 +176,12 @@ LrpimProblem lrpim_cantilever_problem(int nd, const RpimParameters& rpim, double
   return p;
 }
 
-LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, double alpha_q) {
+LrpimCantileverReport run_lrpim_cantilever(int nd, const RpimParameters& rpim, double alpha_q,
+                                           const std::function<void(LrpimProblem*)>& adjust) {
   const double L = kCantileverLength, D = kCantileverDepth, T = kCantileverThickness;
   const double h = D / nd;
   LrpimProblem p = lrpim_cantilever_problem(nd, rpim, alpha_q);
+  if (adjust) adjust(&p);
   const core::TimoshenkoCantilever exact = cantilever_solution(p.material);
   auto exact_u = [exact](const Eigen::Vector3d& x) { return exact.displacement(x); };
   auto exact_strain = [exact](const Eigen::Vector3d& x) { return exact.strain(x); };

@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 // Verification problems of the LRPIM model with known answers (docs/LRPIM.md §4), the counterparts of the EFG's
 // (meshless/verification/verification_problems.hpp): RPIM invariants, the linear patch test, the Timoshenko
 // cantilever's convergence rates, and the closed-form creep of a bar at k = 0 and k != 0. Node clouds are the
@@ -55,9 +56,11 @@ struct LrpimCantileverReport {
 /// x = L, the other faces free; 5 nd by nd by nd cells of the box mesh's node grid (regular, no jitter).
 LrpimProblem lrpim_cantilever_problem(int cells_through_height, const RpimParameters& rpim = {}, double alpha_q = 1.5);
 
-/// The cantilever above, solved, with its errors against the closed form.
+/// The cantilever above, solved, with its errors against the closed form. `adjust` (optional) may change the problem
+/// before the set-up (a rule, the test function; for studies of the rates, docs/LRPIM.md §4).
 LrpimCantileverReport run_lrpim_cantilever(int cells_through_height, const RpimParameters& rpim = {},
-                                           double alpha_q = 1.5);
+                                           double alpha_q = 1.5,
+                                           const std::function<void(LrpimProblem*)>& adjust = {});
 
 struct LrpimCreepReport {
   double k = 0.0;
