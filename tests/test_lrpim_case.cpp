@@ -11,6 +11,7 @@
 #include "core/case.hpp"
 #include "core/case_error.hpp"
 #include "core/geometry.hpp"
+#include "experiments/models/model_registry.hpp"
 #include "meshless/lrpim/lrpim_case.hpp"
 #include "meshless/lrpim/lrpim_verification.hpp"
 #include "meshless/verification/box_mesh.hpp"
@@ -233,6 +234,30 @@ TEST(LrpimCase, RestartedModelSolvesAnotherForceAsANewModelWould) {
       EXPECT_EQ(again.steps[i].residuals, fresh.steps[i].residuals) << "step " << i + 1;
     }
     EXPECT_EQ(again.details["balance_correction_mn"], fresh.details["balance_correction_mn"]);
+  }
+}
+
+// The LRPIM as the Fig. 9 analogue times it (experiments::Model::prepare_load_series): one set-up, then each force's
+// solve on it, with the same samples as the model's own solve of that force, and no set-up charged to the solve.
+TEST(LrpimCase, LoadSeriesOfTheModelSetsUpOnceAndSolvesEachForceAsItsOwnSolve) {
+  core::Case c;
+  core::Geometry g;
+  bent_bar_case(&c, &g);
+  c.material.k = 1.0;
+  c.time.steps = 2;
+  const std::unique_ptr<experiments::Model> lrpim = experiments::make_model("lrpim");
+  ASSERT_NE(lrpim, nullptr);
+  const std::unique_ptr<experiments::LoadSeries> series = lrpim->prepare_load_series(c, g);
+  EXPECT_GT(series->setup_seconds(), 0.0);
+  for (const double factor : {0.5, 2.0}) {
+    core::Case at = c;
+    at.load.force *= factor;
+    const experiments::ModelResult own = lrpim->solve(at, g, {});
+    const experiments::ModelResult in_series = series->solve(at, {});
+    EXPECT_EQ((in_series.sample_displacements - own.sample_displacements).cwiseAbs().maxCoeff(), 0.0) << factor;
+    EXPECT_EQ(in_series.setup_seconds, 0.0);
+    EXPECT_GT(own.setup_seconds, 0.0);
+    EXPECT_EQ(in_series.steps.size(), own.steps.size());
   }
 }
 
