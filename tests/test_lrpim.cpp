@@ -342,16 +342,8 @@ TEST(Lrpim, DISABLED_CantileverRateStudy) {
       line << "  " << nd << " cells: L2 " << r.l2_error << ", energy " << r.energy_error << ", tip "
            << r.tip_deflection / r.exact_tip_deflection << "\n";
     }
-    auto rate = [&](const std::vector<double>& e) {  // least squares of log e against log h
-      double sx = 0, sy = 0, sxx = 0, sxy = 0;
-      for (std::size_t i = 0; i < h.size(); ++i) {
-        const double x = std::log(h[i]), y = std::log(e[i]);
-        sx += x, sy += y, sxx += x * x, sxy += x * y;
-      }
-      const double n = static_cast<double>(h.size());
-      return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-    };
-    std::cout << v.name << ": rates L2 " << rate(l2) << ", energy " << rate(en) << "\n" << line.str() << std::flush;
+    std::cout << v.name << ": rates L2 " << meshless::convergence_rate(h, l2) << ", energy "
+              << meshless::convergence_rate(h, en) << "\n" << line.str() << std::flush;
   }
 }
 

@@ -127,6 +127,13 @@ void bent_bar_case(core::Case* c, core::Geometry* g) {
   c->time.steps = 1;
 }
 
+// The bent bar under the nonlinear law (k = 1) over `steps` steps: the restart and load-series tests' case.
+void nonlinear_bent_bar_case(int steps, core::Case* c, core::Geometry* g) {
+  bent_bar_case(c, g);
+  c->material.k = 1.0;
+  c->time.steps = steps;
+}
+
 // The sum of all local equations against the body's balance (LrpimTestFunction, docs/LRPIM.md §5): the bar on its
 // elastic support bent by a transverse load, whose stress varies so that the clipped spheres' quadrature does not
 // integrate it exactly. With the plain spline the v_i do not sum to 1 and the support's reaction misses the load;
@@ -204,9 +211,7 @@ TEST(LrpimCase, BalanceEquationsHoldTheBentBarsRigidMotion) {
 TEST(LrpimCase, RestartedModelSolvesAnotherForceAsANewModelWould) {
   core::Case c;
   core::Geometry g;
-  bent_bar_case(&c, &g);
-  c.material.k = 1.0;
-  c.time.steps = 3;
+  nonlinear_bent_bar_case(3, &c, &g);
   core::Case heavier = c;
   heavier.load.force *= 2.0;
   for (const LrpimLinearSolver solver : {LrpimLinearSolver::mumps, LrpimLinearSolver::sparse_lu}) {
@@ -242,9 +247,7 @@ TEST(LrpimCase, RestartedModelSolvesAnotherForceAsANewModelWould) {
 TEST(LrpimCase, LoadSeriesOfTheModelSetsUpOnceAndSolvesEachForceAsItsOwnSolve) {
   core::Case c;
   core::Geometry g;
-  bent_bar_case(&c, &g);
-  c.material.k = 1.0;
-  c.time.steps = 2;
+  nonlinear_bent_bar_case(2, &c, &g);
   const std::unique_ptr<experiments::Model> lrpim = experiments::make_model("lrpim");
   ASSERT_NE(lrpim, nullptr);
   const std::unique_ptr<experiments::LoadSeries> series = lrpim->prepare_load_series(c, g);

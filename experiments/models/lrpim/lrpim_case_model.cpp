@@ -18,12 +18,6 @@ std::string LrpimCaseModel::cannot_solve(const core::Case& c) const {
 
 namespace {
 
-void report_set_up(const core::Geometry& g, const SolveRequest& request) {
-  if (request.on_step)
-    request.on_step(fmt::format("lrpim: set-up ({} nodes: local quadrature and RPIM tabulation)",
-                                g.meshless_mesh.num_vertices()));
-}
-
 /// One progress line per converged step.
 std::function<void(const meshless::lrpim::LrpimStepReport&)> step_reporter(const core::Case& c,
                                                                           const SolveRequest& request) {
@@ -92,7 +86,9 @@ class LrpimLoadSeries final : public LoadSeries {
 }  // namespace
 
 ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const {
-  report_set_up(g, request);
+  if (request.on_step)
+    request.on_step(fmt::format("lrpim: set-up ({} nodes: local quadrature and RPIM tabulation)",
+                                g.meshless_mesh.num_vertices()));
   meshless::lrpim::LrpimCaseOptions options;
   options.on_step = step_reporter(c, request);
   const meshless::lrpim::LrpimCaseRun run = meshless::lrpim::run_lrpim_case(c, g, options);
@@ -100,7 +96,7 @@ ModelResult LrpimCaseModel::solve(const core::Case& c, const core::Geometry& g, 
 }
 
 std::unique_ptr<LoadSeries> LrpimCaseModel::prepare_load_series(const core::Case& c, const core::Geometry& g) const {
-  if (const std::string why = cannot_solve(c); !why.empty()) throw std::invalid_argument("lrpim: " + why);
+  // A cut case is refused by lrpim_problem_from_case (core::CaseError at /cut), as in solve().
   return std::make_unique<LrpimLoadSeries>(name(), c, g);
 }
 
