@@ -117,6 +117,10 @@ struct NewtonParameters {
   /// When Newton fails on a step, the step is halved and retried down to this size [s]
   /// (core/step_cutback.hpp); 0 disables the cut-back.
   double min_step = 0.0;
+  /// Start each step from U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1}) instead of U_n while every boundary condition keeps
+  /// its rate (core/step_predictor.hpp, the rule the meshless models use). Changes the path only: the converged
+  /// answer is the same to the Newton tolerance; a failed predicted attempt is retried from U_n before a cut-back.
+  bool extrapolate_start = true;
 };
 
 struct SolverParameters {
@@ -141,6 +145,8 @@ struct StepReport {
   double wall_seconds = 0.0;
   int substeps = 1;                                  ///< converged sub-steps (more than 1 after a cut-back)
   std::vector<core::NewtonAttempt> failed_attempts;  ///< Newton attempts that failed and were cut back
+  /// Attempts from the extrapolated start that failed and were retried from the committed state (no cut-back).
+  std::vector<core::NewtonAttempt> retried_plain;
   double admissibility_margin = 1.0;  ///< smallest 1 + 2k lambda over the quadrature points at convergence
 };
 

@@ -28,6 +28,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -116,8 +117,17 @@ class ViscoelasticSolver {
   void solve(double eta);
   void apply_dirichlet_values(double t_new);
   /// One Newton solve from the committed state to t_new: commits on convergence, restores the solution when
-  /// it fails (the attempt of core::advance_with_cutback).
+  /// it fails (the attempt of core::advance_with_cutback). Starts from the extrapolated state when predict_start()
+  /// allows, and from the committed state when that attempt fails.
   core::NewtonAttempt newton_step(double t_new, StepReport* report);
+  /// Newton's iterations to t_new from the current solution; on failure restores `committed`.
+  core::NewtonAttempt newton_iterations(double t_new, const dealii::TrilinosWrappers::MPI::Vector& committed,
+                                        StepReport* report);
+  /// Moves the solution to U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1}) when NewtonParameters::extrapolate_start is set, the
+  /// last committed step ended at the current time and every boundary condition keeps its rate
+  /// (core/step_predictor.hpp). Returns whether it did.
+  bool predict_start(double t_new);
+  bool conditions_keep_their_rate(double t_before, double t_from, double t_to) const;
   /// The last assembly's smallest margin as an error when it is outside the admissible range, else null.
   std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate(double t_new) const;
   void update_history(double dt);
@@ -157,6 +167,12 @@ class ViscoelasticSolver {
   std::vector<PointHistory> history_;  // active_cell_index * n_q + q, filled on locally owned cells only
   unsigned int n_q_points_ = 0;
   double time_ = 0.0;
+  // The last committed step: its start U_{n-1} and times, for predict_start().
+  struct PreviousStep {
+    dealii::TrilinosWrappers::MPI::Vector start;
+    double t_from = 0.0, t_to = 0.0;
+  };
+  std::optional<PreviousStep> previous_step_;
   double external_force_norm_ = 0.0;  // ||F_ext|| of the last assembly, the residual's scale
   double internal_force_norm_ = 0.0;  // ||F_int|| over all rows (reactions included)
   double step_time_ = 0.0;            // t_{n+1} and dt of the step being assembled (read by workers)

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <unordered_map>
 
+#include "core/step_predictor.hpp"
 #include "meshless/cut/cut_weights.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/node_search.hpp"
@@ -17,7 +18,6 @@
 #include "meshless/parallel_for.hpp"
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/efg_linear_solver.hpp"
-#include "meshless/solvers/step_predictor.hpp"
 
 namespace meshless {
 
@@ -801,7 +801,7 @@ bool EfgModel::predict_start(double t_from, double t_to) {
   const PreviousStep& p = *previous_start_;
   const double dt_before = p.t_to - p.t_from, dt = t_to - t_from;
   if (!(dt_before > 0.0) || std::abs(p.t_to - t_from) > 1e-9 * dt_before) return false;  // not the step before
-  if (!load_keeps_its_rate(problem_.load_scale, p.t_from, t_from, t_to)) return false;
+  if (!core::load_keeps_its_rate(problem_.load_scale, p.t_from, t_from, t_to)) return false;
   u_ += (dt / dt_before) * (u_ - p.u);  // U_{n+1} ~ U_n + (dt_{n+1} / dt_n)(U_n - U_{n-1})
   matrix_current_ = false;
   return true;

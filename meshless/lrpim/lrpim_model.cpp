@@ -13,6 +13,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/step_predictor.hpp"
 #include "meshless/efg/gauss_quadrature_tet.hpp"
 #include "meshless/mls/cubic_spline_weight.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
@@ -21,7 +22,6 @@
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
-#include "meshless/solvers/step_predictor.hpp"
 
 namespace meshless::lrpim {
 
@@ -628,7 +628,7 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
     const Eigen::VectorXd z_start = unknowns();
     // Extrapolated start while the load keeps its rate (EfgOptions::extrapolate_start explains the rule).
     if (problem_.extrapolate_start && previous_start &&
-        load_keeps_its_rate(problem_.load_scale, previous_t, time_, t_new))
+        core::load_keeps_its_rate(problem_.load_scale, previous_t, time_, t_new))
       set_unknowns(z_start + (dt / (time_ - previous_t)) * (z_start - *previous_start));
     mixing.start_sequence();
     for (int i = 0; i < n; ++i)

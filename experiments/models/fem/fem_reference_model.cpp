@@ -33,7 +33,8 @@ ModelResult fem_model_result(const core::Case& c, const core::Geometry& g, const
   int builds = 0;
   for (const auto& s : f.steps) {
     r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
-                       s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin});
+                       s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin,
+                       s.retried_plain});
     builds += s.preconditioner_builds;
   }
   r.details["preconditioner_builds"] = builds;
