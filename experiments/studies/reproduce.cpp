@@ -413,9 +413,10 @@ std::string timing_md(const json& timing) {
       "# Fig. 9 analogue: the time to compute one deformation result\n\n"
       "Case `{}`, {} time step(s) per result, forces along the case's force direction at its load point. Each "
       "time is what one result costs: the model's set-up, assembly and solves, geometry excluded (built once: "
-      "{:.1f} s). A model whose set-up is a large share of its run (the LRPIM's RPIM tabulation) sets up once for "
-      "every force on this cloud, as a simulator would, and its time is that set-up plus this force's solve "
-      "(`= set-up once + solve`); the others set up in each run. The `solves` ratio leaves the set-up out."
+      "{:.1f} s). The meshless models set up once for every force on this cloud, as a simulator would (the LRPIM "
+      "its local quadrature and RPIM functions, the EFG its MLS functions and pattern; each force then factorises "
+      "its own tangent), and their time is that set-up plus this force's solve (`= set-up once + solve`); the FEM "
+      "sets up in each run. The `solves` ratio leaves the set-up out."
       "\n\n| force [N] |",
       timing.at("config").get<std::string>(), timing.at("steps").get<int>(),
       timing.at("geometry_seconds").get<double>());

@@ -905,7 +905,7 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
   return attempt;
 }
 
-void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
+void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction, bool keep_factors) {
   if (!set_up_) throw std::logic_error("EfgModel::restart before setup_system");
   problem_.loaded_faces = std::move(loaded_faces);
   problem_.traction = std::move(traction);
@@ -920,7 +920,9 @@ void EfgModel::restart(std::vector<char> loaded_faces, VectorField traction) {
   residual_.setZero();
   external_.setZero();
   records_.clear();
+  smallest_margin_ = core::SmallestMargin{};  // each run reports its own closest approach to the law's limit
   matrix_current_ = false;  // the factorisation (factorisation_, factorised_dt_) is kept for solve_step to reuse
+  if (!keep_factors) linear_solver_->forget_factors();
 }
 
 void EfgModel::run(const StepObserver& observer) {

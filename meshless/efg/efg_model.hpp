@@ -130,7 +130,9 @@ class EfgModel {
   /// node cloud (the surrogate's training, meshless/surrogate/surrogate_training.hpp) at the cost of the time steps alone.
   /// @param loaded_faces #boundary faces mask of the loaded faces (empty: the faces tagged load)
   /// @param traction t-bar [Pa] at full load on those faces (eq. 24), scaled by problem().load_scale
-  void restart(std::vector<char> loaded_faces, VectorField traction);
+  /// @param keep_factors false: forget the factorised tangent too, so that the run equals a new model's bit for bit
+  ///        (its first step factorises, as a new model's does; the Fig. 9 analogue's series, as the LRPIM's)
+  void restart(std::vector<char> loaded_faces, VectorField traction, bool keep_factors = true);
   /// Replace the cut by `cut` (a progressive incision: the cut advanced) after setup_system(), keeping the
   /// history. A local update (paper §4): the quadrature is rebuilt (cheap geometry), but only the points that are
   /// new or whose covering nodes change weight get their shape functions evaluated again; the others keep their

@@ -23,8 +23,14 @@ class EfgVariantModel final : public Model {
   /// The case with /meshless/enrichment set to this variant (paper: "enrichment" in the paper's configuration),
   /// solved by solve_meshless (models/efg/meshless_runs.hpp).
   ModelResult solve(const core::Case& c, const core::Geometry& g, const SolveRequest& request) const override;
+  /// Without a cut: one EfgModel set up on the cloud, restarted under each force (EfgModel::restart keeps the MLS
+  /// tables and the pattern; each force factorises its own tangent, as the LRPIM's series does). A cut case sets up
+  /// in each solve (the default).
+  std::unique_ptr<LoadSeries> prepare_load_series(const core::Case& c, const core::Geometry& g) const override;
 
  private:
+  /// The case this variant solves: /meshless/enrichment set to it (and the paper's configuration for "paper").
+  core::Case variant_case(const core::Case& c) const;
   Variant variant_;
 };
 

@@ -112,17 +112,8 @@ std::string front_transition_hint(const core::InadmissibleStrain& e, const core:
                              2.0 * front_transition * 1e3);
 }
 
-ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
-                           const std::function<void(const std::string&)>& on_step,
-                           const meshless::EfgOptions& options, bool progressive_cut) {
-  const auto t_start = std::chrono::steady_clock::now();
-  meshless::EfgProblem problem = meshless::problem_from_case(c, g);
-  // A progressive incision starts with its first increment and advances at the start of the next steps.
-  const int increments = progressive_cut && problem.cut ? c.cut->steps : 1;
-  const std::optional<core::RuledSurface> full_cut = problem.cut;
-  auto cut_after = [&](int k) { return full_cut->truncated(full_cut->trace_length() * k / increments); };
-  if (increments > 1) problem.cut = cut_after(1);
-  meshless::EfgModel model(std::move(problem), options);
+void set_up_meshless(meshless::EfgModel& model, const core::Case& c,
+                     const std::function<void(const std::string&)>& on_step) {
   try {
     model.setup_system();
   } catch (const meshless::SingularMomentMatrix& e) {
@@ -134,6 +125,30 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
                         "{} non-zeros, {}",
                         st.num_nodes, st.num_cells, st.num_volume_points, st.mean_nodes_per_point, st.alpha,
                         st.matrix_nonzeros, st.linear_solver));
+}
+
+ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
+                           const std::function<void(const std::string&)>& on_step,
+                           const meshless::EfgOptions& options, bool progressive_cut) {
+  const auto t_start = std::chrono::steady_clock::now();
+  meshless::EfgProblem problem = meshless::problem_from_case(c, g);
+  // A progressive incision starts with its first increment and advances at the start of the next steps.
+  const int increments = progressive_cut && problem.cut ? c.cut->steps : 1;
+  const std::optional<core::RuledSurface> full_cut = problem.cut;
+  if (increments > 1) problem.cut = full_cut->truncated(full_cut->trace_length() / increments);
+  meshless::EfgModel model(std::move(problem), options);
+  set_up_meshless(model, c, on_step);
+  return run_meshless_steps(model, c, g, vtu_prefix, on_step, {increments, full_cut, t_start, {}});
+}
+
+ModelResult run_meshless_steps(meshless::EfgModel& model, const core::Case& c, const core::Geometry& g,
+                               const std::string& vtu_prefix, const std::function<void(const std::string&)>& on_step,
+                               const MeshlessRun& run) {
+  const auto t_start = run.start;
+  const int increments = run.cut_increments;
+  const std::optional<core::RuledSurface>& full_cut = run.full_cut;
+  auto cut_after = [&](int k) { return full_cut->truncated(full_cut->trace_length() * k / increments); };
+  const meshless::EfgStatistics& st = model.statistics();
   ModelResult r;
   r.model = "meshless";
   nlohmann::json cut_updates = nlohmann::json::array();
@@ -196,7 +211,12 @@ ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const s
   r.sample_points = g.sample_points;
   r.sample_displacements = model.displacements_at(g.sample_points);
   if (!r.sample_displacements.allFinite()) throw std::runtime_error("meshless: non-finite sample displacement");
-  const meshless::EfgTimings& t = model.timings();
+  // This run's share of the model's timings (a restarted model's set-up was paid before the run).
+  meshless::EfgTimings t = model.timings();
+  t.setup_seconds -= run.timings_before.setup_seconds;
+  t.shape_function_seconds -= run.timings_before.shape_function_seconds;
+  t.assembly_seconds -= run.timings_before.assembly_seconds;
+  t.solve_seconds -= run.timings_before.solve_seconds;
   r.setup_seconds = t.setup_seconds + t.shape_function_seconds;
   r.total_seconds = seconds_since(t_start);
   r.details["n_nodes"] = st.num_nodes;

@@ -1,6 +1,7 @@
 #pragma once
 // The meshless (EFG) model behind `tissue solve meshless` (solve_commands.cpp) and `tissue verify meshless`
 // (verify_commands.cpp).
+#include <chrono>
 #include <functional>
 #include <optional>
 #include <string>
@@ -10,6 +11,7 @@
 #include "core/inadmissible_strain.hpp"
 #include "core/ruled_surface.hpp"
 #include "experiments/models/model_result.hpp"
+#include "meshless/efg/efg_model.hpp"
 #include "meshless/efg/efg_problem.hpp"
 
 namespace experiments {
@@ -23,6 +25,25 @@ namespace experiments {
 ModelResult solve_meshless(const core::Case& c, const core::Geometry& g, const std::string& vtu_prefix,
                            const std::function<void(const std::string&)>& on_step = {},
                            const meshless::EfgOptions& options = {}, bool progressive_cut = false);
+
+/// EfgModel::setup_system with the case's advice when a point has too few nodes (SingularMomentMatrix), and one
+/// progress line describing the model.
+void set_up_meshless(meshless::EfgModel& model, const core::Case& c,
+                     const std::function<void(const std::string&)>& on_step = {});
+
+/// How run_meshless_steps runs a set-up (or restarted) model through the case's steps.
+struct MeshlessRun {
+  int cut_increments = 1;                      ///< > 1: the cut advances to full_cut over this many first steps
+  std::optional<core::RuledSurface> full_cut;  ///< the case's whole cut (with cut_increments > 1)
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();  ///< the result's total from here
+  meshless::EfgTimings timings_before;         ///< model.timings() before this run: the result reports the rest
+};
+
+/// The time steps of solve_meshless on a model already set up (or restarted under the case's load), into the
+/// comparator's result: samples, per-step timings, details.
+ModelResult run_meshless_steps(meshless::EfgModel& model, const core::Case& c, const core::Geometry& g,
+                               const std::string& vtu_prefix, const std::function<void(const std::string&)>& on_step,
+                               const MeshlessRun& run);
 
 /// What to change when the EFG's strain left the law's admissible range (e) beside a cut's front: within one node
 /// spacing of the front the cause is the enrichment's sharp front (docs/MESHLESS.md §5.2), not the load, so the
