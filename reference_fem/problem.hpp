@@ -85,7 +85,7 @@ struct LinearSolverParameters {
   /// rough solve does as well as an exact one, and near it eta_k r_k ~ r_k^2 keeps Newton quadratic.
   /// forcing = 0, or a linear material (k = 0): always `tolerance`.
   double tolerance = 1e-10;
-  double forcing = 0.01;
+  double forcing = 0.1;  ///< 0.01 before the extrapolated start made r_k small (docs/FEM_REFERENCE.md)
   int max_iterations = 500;
   /// Rebuild the preconditioner (LU factors or AMG hierarchy) from the current tangent when the previous
   /// GMRES solve needed more than this many iterations per decade of residual reduction (a stale
