@@ -712,7 +712,7 @@ void EfgModel::assemble_system(bool with_matrix) {
   }
 }
 
-void EfgModel::solve() {
+void EfgModel::solve(double tolerance) {
   if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
     throw std::logic_error("EfgModel::solve without an assembled matrix");
   last_solve_prepared_ = false;
@@ -720,7 +720,8 @@ void EfgModel::solve() {
     // A newer tangent than the factors: GMRES preconditioned by them costs a few back-substitutions, a fresh
     // factorisation tens of seconds on the lung (docs/MESHLESS.md §2). factorised_dt_ stays that of the factors.
     if (std::optional<Eigen::VectorXd> du =
-            linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations)) {
+            linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations,
+                                                       tolerance)) {
       u_ += *du;
       last_linear_iterations_ = linear_solver_->last_iterations();
       return;
@@ -762,6 +763,15 @@ bool EfgModel::kept_factors_too_slow(double contraction, double residual_over_ta
   // At this contraction the residual reaches the target after log(target / r) / log(contraction) more iterations.
   const double iterations_left = std::log(residual_over_target) / -std::log(contraction);
   return iteration + iterations_left > options_.max_newton_iterations;
+}
+
+double EfgModel::gmres_tolerance(double relative_residual, double target_over_residual) const {
+  if (!(options_.gmres_forcing > 0.0)) return options_.iterative_tolerance;
+  // Eisenstat-Walker: Newton contracts ||R|| to about forcing * ||R|| + O(||R||^2), so a linear residual below
+  // forcing * (relative residual) keeps the convergence superlinear; and half of what is left to the tolerance
+  // lets the last iteration finish. Any more is GMRES work that Newton's next residual would not see.
+  const double wanted = std::max(options_.gmres_forcing * relative_residual, 0.5 * target_over_residual);
+  return std::clamp(wanted, options_.iterative_tolerance, options_.gmres_forcing);
 }
 
 core::NewtonAttempt EfgModel::newton_step(double t_from, double t_to, StepRecord* rec) {
@@ -866,23 +876,40 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
     attempt.failure = diverging(attempt.residuals);
     if (!attempt.converged()) break;
     const double target = options_.newton_tolerance * reference;
-    refresh = !constant_tangent && reuse && r > target && kept_factors_too_slow(r / previous, r / target, it);
+    const double contraction = r / previous;
     previous = r;
     if (r <= target) break;
     if (it >= options_.max_newton_iterations) {
       attempt.failure = "the iteration limit (max_newton_iterations) was reached";
       break;
     }
+    // The kept factors were too slow over the last update: the tangent of this iterate is assembled now and solved
+    // in this iteration, rather than after one more update on the factors that just proved slow. The residual is
+    // assembled again with it (the same ||R||: the same iterate), which costs less than that update's
+    // back-substitution and its residual. The next iteration goes back to the kept factors and is watched afresh.
+    bool refreshed = false;
+    if (!constant_tangent && reuse && kept_factors_too_slow(contraction, r / target, it)) {
+      t0 = std::chrono::steady_clock::now();
+      try {
+        assemble_system(true);
+      } catch (const std::runtime_error& e) {
+        attempt.failure = e.what();
+        break;
+      }
+      rec->assembly_seconds += seconds_since(t0);
+      refreshed = true;
+    }
+    refresh = false;
     t0 = std::chrono::steady_clock::now();
     u_before = u_;
     try {
-      solve();
+      solve(gmres_tolerance(r / reference, options_.newton_tolerance * reference / r));
     } catch (const std::runtime_error& e) {
       attempt.failure = e.what();
       break;
     }
     // Mix only updates of one fixed map: a back-substitution on the kept factors.
-    last_mixed = reuse && !last_solve_prepared_ && last_linear_iterations_ == 0 && mixing.depth() > 0;
+    last_mixed = reuse && !refreshed && !last_solve_prepared_ && last_linear_iterations_ == 0 && mixing.depth() > 0;
     if (last_mixed) {
       plain_update = u_ - u_before;
       u_ = u_before + mixing.next_update(u_before, plain_update);

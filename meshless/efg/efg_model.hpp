@@ -117,7 +117,9 @@ class EfgModel {
   /// K_n + K^alpha_n of eq. 20 with the consistent E_k (eq. 21).
   void assemble_system(bool with_matrix);
   /// Solve (K_n + K^alpha_n) dU = -R (eq. 20) and update U (eq. 14). Throws if dU is not finite.
-  void solve();
+  /// @param tolerance  the relative residual a GMRES solve on earlier factors must reach (an inexact Newton step);
+  ///                   0: EfgOptions::iterative_tolerance. A direct solve on current factors is exact either way.
+  void solve(double tolerance = 0.0);
   /// Advance one step (1-based index into problem().step_times): Newton to convergence, then commit history.
   /// When Newton fails the step is halved and retried down to problem().min_step (core/step_cutback.hpp).
   /// @throws core::InadmissibleStrain when a converged state leaves the law's admissible range, or when the
@@ -200,6 +202,9 @@ class EfgModel {
   /// Move U to the extrapolated start of the step (EfgOptions::extrapolate_start) when the last converged
   /// (sub-)step ended at t_from and the load kept its rate; false (U unchanged) otherwise.
   bool predict_start(double t_from, double t_to);
+  /// The relative residual a GMRES solve on earlier factors must reach at Newton's relative residual
+  /// `relative_residual`, when Newton's tolerance is `target_over_residual` times ||R|| (EfgOptions::gmres_forcing).
+  double gmres_tolerance(double relative_residual, double target_over_residual) const;
   /// Whether the kept factors must give way to the current tangent: they contracted the residual by
   /// `contraction` in the last iteration, which is more than EfgOptions::refactor_contraction allows, or too
   /// little to take ||R|| (now `residual_over_target` times Newton's target) there by max_newton_iterations.

@@ -51,6 +51,11 @@ struct EfgOptions {
   /// with those factors (a few back-substitutions), and factorised only when GMRES needs more than this many
   /// iterations to reach iterative_tolerance. Direct solvers only; 0 always factorises. docs/MESHLESS.md §2.
   int earlier_factors_max_iterations = 30;
+  /// That GMRES solve stops at the relative residual max(gmres_forcing * ||R|| / ||F||, half of what Newton still
+  /// needs), within [iterative_tolerance, gmres_forcing] (Eisenstat & Walker 1996, as the FEM reference's GMRES):
+  /// Newton's next residual is then about as small as with an exact solve. 0: solve to iterative_tolerance.
+  /// docs/MESHLESS.md §2, "How far GMRES solves".
+  double gmres_forcing = 0.1;
   /// Anderson mixing of the updates on kept factors (meshless/solvers/anderson_acceleration.hpp): how many earlier
   /// updates each mix uses. 0: plain iterations on the kept factors. A failed mixed attempt is retried plain
   /// before the step is halved. docs/MESHLESS.md §2, "Anderson mixing and the predictor".

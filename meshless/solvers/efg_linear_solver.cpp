@@ -161,14 +161,15 @@ class EarlierFactors {
 
 std::optional<Eigen::VectorXd> EfgLinearSolver::solve_with_earlier_factors(const SparseMatrix& a,
                                                                            const Eigen::VectorXd& rhs,
-                                                                           int max_iterations) {
+                                                                           int max_iterations,
+                                                                           double tolerance) {
   if (!factored_ || max_iterations <= 0) return std::nullopt;
   Eigen::GMRES<SparseMatrix, EarlierFactors> gmres;
   gmres.preconditioner().back_substitute = [this](const Eigen::VectorXd& b) -> Eigen::VectorXd {
     if (kind_ == LinearSolverKind::direct) return mumps_->solve(b);
     return umfpack_->lu.solve(b);
   };
-  gmres.setTolerance(options_.iterative_tolerance);
+  gmres.setTolerance(tolerance > 0.0 ? tolerance : options_.iterative_tolerance);
   gmres.setMaxIterations(max_iterations);
   gmres.set_restart(max_iterations);
   gmres.compute(a);

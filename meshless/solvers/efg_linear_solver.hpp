@@ -46,11 +46,12 @@ class EfgLinearSolver {
   /// whose cut changed).
   void forget_factors() { prepared_ = false; factored_ = false; }
   /// dx with A dx = rhs for a newer matrix `a` of the pattern the factors were computed for, by GMRES
-  /// preconditioned with those factors (Eigen's GMRES, left-preconditioned, to options.iterative_tolerance).
-  /// std::nullopt when there are no factors or GMRES needs more than max_iterations; the caller then prepares
-  /// `a`. On success the factors count as prepared again: later right-hand sides reuse them.
+  /// preconditioned with those factors (Eigen's GMRES, left-preconditioned), to the relative residual `tolerance`
+  /// (≤ 0: options.iterative_tolerance). std::nullopt when there are no factors or GMRES needs more than
+  /// max_iterations; the caller then prepares `a`. On success the factors count as prepared again: later
+  /// right-hand sides reuse them.
   std::optional<Eigen::VectorXd> solve_with_earlier_factors(const SparseMatrix& a, const Eigen::VectorXd& rhs,
-                                                            int max_iterations);
+                                                            int max_iterations, double tolerance);
   /// x with A x = rhs for the prepared A. Throws std::runtime_error when the iterative method does not reach
   /// options.iterative_tolerance within options.iterative_max_iterations, or the result is not finite.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs);
