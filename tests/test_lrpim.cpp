@@ -409,3 +409,22 @@ TEST(Lrpim, CreepBarFollowsTheClosedFormOfTheNonlinearLaw) {
   // k != 0 changes the answer: the same load at k = 0 strains more than 1% further.
   EXPECT_GT(n0 - r.strain.front(), 0.01 * n0);
 }
+
+TEST(Lrpim, KeptFactorsGiveWayOnTheRunsMeanRateNotOnOneSlowUpdate) {
+  using meshless::lrpim::kept_factors_too_slow;
+  const double target = 1e-8;
+  // lung_small's step 4 on kept factors (README command 1): 2.8e-2, 1.9e-3, 1.3e-4, 3.0e-6, then 1.6e-6. The last
+  // update contracted by 0.53, the run by 0.15 per update: keep the factors (the last-update rule factorised here).
+  EXPECT_FALSE(kept_factors_too_slow(1.6e-6, 3.0e-6, 2.8e-2, 4, target, 4, 0.2, 25));
+  // A run that stalls: from 1e-2 one update of 0.01, then 0.9 per update. Kept after the first slow update (mean
+  // 0.095), refactorised after the second (mean 0.2008).
+  EXPECT_FALSE(kept_factors_too_slow(9e-5, 1e-4, 1e-2, 2, target, 2, 0.2, 25));
+  EXPECT_TRUE(kept_factors_too_slow(8.1e-5, 9e-5, 1e-2, 3, target, 3, 0.2, 25));
+  // An update that did not reduce ||R|| ends the run whatever the mean.
+  EXPECT_TRUE(kept_factors_too_slow(2e-6, 1.9e-6, 1e-1, 4, target, 4, 0.2, 25));
+  // The guard: 0.15 per update is fast enough, but from 1e-2 at iteration 20 the target needs 7.3 more updates.
+  EXPECT_TRUE(kept_factors_too_slow(1e-2 * 0.15, 1e-2, 1e-2, 1, target, 20, 0.2, 25));
+  EXPECT_FALSE(kept_factors_too_slow(1e-2 * 0.15, 1e-2, 1e-2, 1, target, 10, 0.2, 25));
+  // Nothing measured on these factors in this step yet.
+  EXPECT_FALSE(kept_factors_too_slow(5e-2, 1.0, 5e-2, 0, target, 0, 0.2, 25));
+}
