@@ -884,9 +884,9 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
       break;
     }
     // The kept factors were too slow over the last update: the tangent of this iterate is assembled now and solved
-    // in this iteration, rather than after one more update on the factors that just proved slow. The residual is
-    // assembled again with it (the same ||R||: the same iterate), which costs less than that update's
-    // back-substitution and its residual. The next iteration goes back to the kept factors and is watched afresh.
+    // in this iteration, rather than after one more update on the factors that just proved slow (a residual and a
+    // back-substitution that gain little). The residual is assembled again with it (the same ||R||: the same
+    // iterate). The next iteration goes back to the kept factors and is watched afresh.
     bool refreshed = false;
     if (!constant_tangent && reuse && kept_factors_too_slow(contraction, r / target, it)) {
       t0 = std::chrono::steady_clock::now();
