@@ -18,6 +18,7 @@
 #include "meshless/lrpim/box_body.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
 #include "meshless/lrpim/lrpim_model.hpp"
+#include "meshless/solvers/kept_factors.hpp"
 #include "meshless/lrpim/surface_body.hpp"
 #include "meshless/verification/box_mesh.hpp"
 #include "meshless/lrpim/lrpim_verification.hpp"
@@ -411,7 +412,7 @@ TEST(Lrpim, CreepBarFollowsTheClosedFormOfTheNonlinearLaw) {
 }
 
 TEST(Lrpim, KeptFactorsGiveWayOnTheRunsMeanRateNotOnOneSlowUpdate) {
-  using meshless::lrpim::kept_factors_too_slow;
+  using meshless::kept_factors_too_slow;
   const double target = 1e-8;
   // lung_small's step 4 on kept factors (README command 1): 2.8e-2, 1.9e-3, 1.3e-4, 3.0e-6, then 1.6e-6. The last
   // update contracted by 0.53, the run by 0.15 per update: keep the factors (the last-update rule factorised here).

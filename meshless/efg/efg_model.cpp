@@ -17,6 +17,7 @@
 #include "meshless/mls/support_radii.hpp"
 #include "meshless/parallel_for.hpp"
 #include "meshless/solvers/anderson_acceleration.hpp"
+#include "meshless/solvers/kept_factors.hpp"
 #include "meshless/solvers/efg_linear_solver.hpp"
 
 namespace meshless {
@@ -758,13 +759,6 @@ StepRecord EfgModel::solve_step(int step) {
   return rec;
 }
 
-bool EfgModel::kept_factors_too_slow(double contraction, double residual_over_target, int iteration) const {
-  if (contraction > options_.refactor_contraction || contraction >= 1.0) return true;
-  // At this contraction the residual reaches the target after log(target / r) / log(contraction) more iterations.
-  const double iterations_left = std::log(residual_over_target) / -std::log(contraction);
-  return iteration + iterations_left > options_.max_newton_iterations;
-}
-
 double EfgModel::gmres_tolerance(double relative_residual, double target_over_residual) const {
   if (!(options_.gmres_forcing > 0.0)) return options_.iterative_tolerance;
   // Eisenstat-Walker: Newton contracts ||R|| to about forcing * ||R|| + O(||R||^2), so a linear residual below
@@ -842,12 +836,11 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
   // The factors' dt, compared to round-off: step times are sums (0.6 - 0.4 is 0.2 + 1e-16), and a
   // last-bit difference must not cost a factorisation.
   auto factors_dt = [&] { return std::abs(factorised_dt_ - current_dt_) <= 1e-9 * std::abs(current_dt_); };
-  bool refresh = !linear_solver_->prepared() || !factors_dt();
   double previous = std::numeric_limits<double>::infinity();
   Eigen::VectorXd u_before, plain_update;  // the last solve's iterate and its unmixed update
   bool last_mixed = false;
   for (int it = 0;; ++it) {
-    const bool reuse = !refresh && linear_solver_->prepared() && factors_dt();
+    const bool reuse = linear_solver_->prepared() && factors_dt();
     auto t0 = std::chrono::steady_clock::now();
     try {
       assemble_system(!reuse);
@@ -876,7 +869,7 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
     attempt.failure = diverging(attempt.residuals);
     if (!attempt.converged()) break;
     const double target = options_.newton_tolerance * reference;
-    const double contraction = r / previous;
+    const double last = previous;
     previous = r;
     if (r <= target) break;
     if (it >= options_.max_newton_iterations) {
@@ -888,7 +881,9 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
     // back-substitution that gain little). The residual is assembled again with it (the same ||R||: the same
     // iterate). The next iteration goes back to the kept factors and is watched afresh.
     bool refreshed = false;
-    if (!constant_tangent && reuse && kept_factors_too_slow(contraction, r / target, it)) {
+    if (!constant_tangent && reuse &&
+        kept_factors_too_slow(r, last, last, 1, target, it, options_.refactor_contraction,
+                              options_.max_newton_iterations)) {
       t0 = std::chrono::steady_clock::now();
       try {
         assemble_system(true);
@@ -899,7 +894,6 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
       rec->assembly_seconds += seconds_since(t0);
       refreshed = true;
     }
-    refresh = false;
     t0 = std::chrono::steady_clock::now();
     u_before = u_;
     try {

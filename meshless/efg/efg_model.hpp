@@ -205,10 +205,6 @@ class EfgModel {
   /// The relative residual a GMRES solve on earlier factors must reach at Newton's relative residual
   /// `relative_residual`, when Newton's tolerance is `target_over_residual` times ||R|| (EfgOptions::gmres_forcing).
   double gmres_tolerance(double relative_residual, double target_over_residual) const;
-  /// Whether the kept factors must give way to the current tangent: they contracted the residual by
-  /// `contraction` in the last iteration, which is more than EfgOptions::refactor_contraction allows, or too
-  /// little to take ||R|| (now `residual_over_target` times Newton's target) there by max_newton_iterations.
-  bool kept_factors_too_slow(double contraction, double residual_over_target, int iteration) const;
   /// Build the weight modifier of `cut` (null: none) and install it into the MLS shape functions.
   void install_cut(const core::RuledSurface* cut);
   /// Volume points, and boundary points (outer faces and the lips of the cut), for the current problem.

@@ -19,6 +19,7 @@
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/support_radii.hpp"
 #include "meshless/parallel_for.hpp"
+#include "meshless/solvers/kept_factors.hpp"
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/mumps_lu.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
@@ -741,17 +742,6 @@ void LrpimModel::run(const std::function<void(const LrpimModel&, const LrpimStep
     steps_.push_back(rec);
     if (on_step) on_step(*this, rec);
   }
-}
-
-bool kept_factors_too_slow(double rn, double last, double run_start, int run_length, double target, int iteration,
-                           double contraction, int max_iterations) {
-  if (run_length == 0) return false;  // nothing measured on these factors in this step yet
-  if (!(rn < last)) return true;
-  // lung_small's step 4 (README command 1): 0.07, 0.07, 0.02, then 0.53 an iteration short of the tolerance.
-  const double rate = std::pow(rn / run_start, 1.0 / run_length);
-  if (rate > contraction) return true;
-  // At that rate the residual reaches the target after log(target / rn) / log(rate) more updates.
-  return rn > target && iteration + std::log(rn / target) / -std::log(rate) > max_iterations;
 }
 
 void LrpimModel::linear_system(double time, double dt, LrpimMatrix* k, Eigen::VectorXd* r) const {

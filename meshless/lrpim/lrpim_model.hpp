@@ -89,15 +89,6 @@ struct LrpimStatistics {
   double setup_seconds = 0.0, assembly_seconds = 0.0, solve_seconds = 0.0;
 };
 
-/// Modified Newton's test (LrpimProblem::refactor_contraction): whether the kept factors must give way to the
-/// current tangent at ||R|| = `rn`, the last update having started at `last`. `run_start` is ||R|| where this step's run
-/// of `run_length` updates on these factors began. True when the last update did not reduce ||R||, when the run
-/// contracted ||R|| by less than `contraction` per update on average (the geometric mean: Anderson-mixed updates
-/// contract unevenly, and one slow update in a fast run does not pay for a factorisation), or when at that rate
-/// ||R|| would not reach `target` by iteration `max_iterations` (the EFG's guard, EfgModel::kept_factors_too_slow).
-bool kept_factors_too_slow(double rn, double last, double run_start, int run_length, double target, int iteration,
-                           double contraction, int max_iterations);
-
 class LrpimModel {
  public:
   /// Tabulates the local quadrature and the RPIM functions of every point (throws SingularRpimMatrix or

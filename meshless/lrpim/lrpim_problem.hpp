@@ -99,8 +99,8 @@ struct LrpimProblem {
   /// 0: full Newton (the tangent factorised at every iteration). > 0: the last factors are reused while the updates
   /// on them in this step reduce ||R|| to at most this ratio per update on average (the geometric mean, since
   /// Anderson-mixed updates contract unevenly) and would reach the tolerance within max_newton_iterations, and the
-  /// current tangent is factorised when they do not (kept_factors_too_slow in lrpim_model.hpp): a nearly linear case then
-  /// factorises once or twice per run.
+  /// current tangent is factorised when they do not (meshless/solvers/kept_factors.hpp): a nearly linear case
+  /// then factorises once or twice per run.
   double refactor_contraction = 0.0;
   /// With kept factors (refactor_contraction > 0): Anderson mixing of the updates on one set of factors, and the
   /// extrapolated start of each step while the load keeps its rate; the EFG's EfgOptions::anderson_depth and
