@@ -190,6 +190,8 @@ class EfgModel {
 
  private:
   void update_material(double dt, bool with_tangent);
+  /// residual_ = the internal forces, eq. 21's int B_i^T sigma at the current stresses (update_material first).
+  void add_internal_forces();
   /// The last material update's weakest point as an error when it is outside the admissible range, else null.
   std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate() const;
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
@@ -246,6 +248,7 @@ class EfgModel {
   std::vector<core::KelvinState> states_;   // history at t_n, one per volume point
   std::vector<core::Vector6> strain_, stress_;
   std::vector<core::Matrix6> tangent_;
+  Eigen::MatrixXd force_blocks_;  // 3N by blocks: scratch of add_internal_forces, kept to spare its allocation
 
   Eigen::VectorXd u_, residual_, external_;
   SparseMatrix matrix_;
