@@ -708,15 +708,23 @@ void EfgModel::assemble_system(bool with_matrix) {
         const int q = volume_incidence_.points[e];
         const Eigen::Vector3d g = vt.dphi.col(volume_incidence_.slots[e]) + vci_correction_.col(i);
         const Eigen::Matrix<double, 3, 6> gd = vt.weights[q] * (b_transpose(g) * tangent_[q]);
+        // (B_i^T E_k) B_j is linear in h = grad phi_j: the 3x3 block is m h, row 3a + c of m holding B_j's zero
+        // pattern (eq. 22). One small fixed-size product per node j, which Eigen vectorises: lung_small's tangent in
+        // 1.27-1.36 s against 1.53-1.58 s with the 27 multiply-adds written out (BM_EfgAssemblyLung/1).
+        Eigen::Matrix<double, 9, 3> m;
+        for (int a = 0; a < 3; ++a) {
+          m.row(3 * a) << gd(a, 0), gd(a, 3), gd(a, 5);
+          m.row(3 * a + 1) << gd(a, 3), gd(a, 1), gd(a, 4);
+          m.row(3 * a + 2) << gd(a, 5), gd(a, 4), gd(a, 2);
+        }
         for (int s = vt.begin(q); s < vt.end(q); ++s) {
           const int k = position[vt.nodes[s]];
-          const double hx = vt.dphi(0, s), hy = vt.dphi(1, s), hz = vt.dphi(2, s);
-          // (B_i^T E_k) B_j with the zero pattern of B_j (eq. 22) spelt out: 27 multiplications.
+          const Eigen::Matrix<double, 9, 1> block = m * vt.dphi.col(s);
           for (int a = 0; a < 3; ++a) {
             double* v = row[a] + 3 * k;
-            v[0] += gd(a, 0) * hx + gd(a, 3) * hy + gd(a, 5) * hz;
-            v[1] += gd(a, 1) * hy + gd(a, 3) * hx + gd(a, 4) * hz;
-            v[2] += gd(a, 2) * hz + gd(a, 4) * hy + gd(a, 5) * hx;
+            v[0] += block[3 * a];
+            v[1] += block[3 * a + 1];
+            v[2] += block[3 * a + 2];
           }
         }
       }
