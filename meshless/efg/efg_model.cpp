@@ -52,6 +52,22 @@ inline Eigen::Matrix<double, 3, 6> b_transpose(const Eigen::Vector3d& g) {
   return bt;
 }
 
+/// eq. 17: the engineering strain at point q of `table` for the nodal parameters u (the trial gradients, without VCI).
+inline core::Vector6 strain_at(const ShapeTable& table, int q, const Eigen::VectorXd& u) {
+  core::Vector6 e = core::Vector6::Zero();
+  for (int s = table.begin(q); s < table.end(q); ++s) {
+    const Eigen::Vector3d g = table.dphi.col(s);
+    const Eigen::Vector3d us = u.segment<3>(3 * table.nodes[s]);
+    e[0] += g.x() * us.x();
+    e[1] += g.y() * us.y();
+    e[2] += g.z() * us.z();
+    e[3] += g.y() * us.x() + g.x() * us.y();
+    e[4] += g.z() * us.y() + g.y() * us.z();
+    e[5] += g.z() * us.x() + g.x() * us.z();
+  }
+  return e;
+}
+
 }  // namespace
 
 EfgModel::EfgModel(EfgProblem problem, EfgOptions options)
@@ -598,17 +614,7 @@ void EfgModel::update_material(double dt, bool with_tangent) {
   const bool check_margin = problem_.material.k != 0.0;  // the margin is 1 everywhere when k = 0
   if (check_margin) margins_.resize(t.size());
   parallel_for(t.size(), 512, [&](int q) {
-    core::Vector6 e = core::Vector6::Zero();
-    for (int s = t.begin(q); s < t.end(q); ++s) {
-      const Eigen::Vector3d g = t.dphi.col(s);
-      const Eigen::Vector3d u = u_.segment<3>(3 * t.nodes[s]);
-      e[0] += g.x() * u.x();
-      e[1] += g.y() * u.y();
-      e[2] += g.z() * u.z();
-      e[3] += g.y() * u.x() + g.x() * u.y();
-      e[4] += g.z() * u.y() + g.y() * u.z();
-      e[5] += g.z() * u.x() + g.x() * u.z();
-    }
+    const core::Vector6 e = strain_at(t, q, u_);
     strain_[q] = e;
     if (!e.allFinite())
       throw std::runtime_error(fmt::format("EfgModel '{}': non-finite strain at volume point {}", problem_.name, q));
@@ -636,12 +642,19 @@ std::shared_ptr<const core::InadmissibleStrain> EfgModel::inadmissible_iterate()
 }
 
 void EfgModel::add_internal_forces() {
-  // f_i = sum_q w_q B_i(X_q)^T sigma_q (eq. 21), the test gradient with the VCI correction of node i. Point by point,
-  // so that the table (tens of bytes per point-node entry, hundreds of MB on the lung) is read once in its order;
-  // node by node through the incidence each entry was a cache miss (lung_small's residual: 0.207 s that way, 0.034 s
-  // this way; bench_efg's BM_EfgAssemblyLung/0).
-  // The points are split into a fixed number of consecutive blocks, each summed into its own vector, and the blocks
-  // are added in their order: the sum does not depend on the number of threads or on their timing.
+  // f_i = sum_q w_q B_i(X_q)^T sigma_q (eq. 21).
+  weighted_stress_.resize(stress_.size());
+  parallel_for(volume_.size(), 4096, [&](int q) { weighted_stress_[q] = volume_.weights[q] * stress_[q]; });
+  add_test_gradient_sums(weighted_stress_, &residual_);
+}
+
+void EfgModel::add_test_gradient_sums(const std::vector<core::Vector6>& weighted, Eigen::VectorXd* out) {
+  // out_i = sum_q B_i(X_q)^T weighted_q, the test gradient with the VCI correction of node i. Point by point, so
+  // that the table (tens of bytes per point-node entry, hundreds of MB on the lung) is read once in its order; node
+  // by node through the incidence each entry was a cache miss (lung_small's residual: 0.207 s that way, 0.034 s this
+  // way; bench_efg's BM_EfgAssemblyLung/0). The points are split into a fixed number of consecutive blocks, each
+  // summed into its own vector, and the blocks are added in their order: the sum does not depend on the number of
+  // threads or on their timing.
   const ShapeTable& vt = volume_;
   const int n = problem_.mesh.num_vertices();
   const int points = vt.size();
@@ -652,19 +665,38 @@ void EfgModel::add_internal_forces() {
     std::fill(f, f + 3 * n, 0.0);
     const int q_end = static_cast<int>(static_cast<long long>(points) * (b + 1) / blocks);
     for (int q = static_cast<int>(static_cast<long long>(points) * b / blocks); q < q_end; ++q) {
-      const core::Vector6 ws = vt.weights[q] * stress_[q];
+      const core::Vector6& ws = weighted[q];
       for (int s = vt.begin(q); s < vt.end(q); ++s) {
         const int j = vt.nodes[s];
         const Eigen::Vector3d g = vt.dphi.col(s) + vci_correction_.col(j);
-        // B_j^T (w sigma) with the zero pattern of eq. 22 spelt out (Voigt order xx, yy, zz, xy, yz, xz).
+        // B_j^T ws with the zero pattern of eq. 22 spelt out (Voigt order xx, yy, zz, xy, yz, xz).
         f[3 * j] += g.x() * ws[0] + g.y() * ws[3] + g.z() * ws[5];
         f[3 * j + 1] += g.y() * ws[1] + g.x() * ws[3] + g.z() * ws[4];
         f[3 * j + 2] += g.z() * ws[2] + g.y() * ws[4] + g.x() * ws[5];
       }
     }
   });
-  residual_ = force_blocks_.col(0);
-  for (int b = 1; b < blocks; ++b) residual_ += force_blocks_.col(b);
+  *out = force_blocks_.col(0);
+  for (int b = 1; b < blocks; ++b) *out += force_blocks_.col(b);
+}
+
+void EfgModel::apply_tangent(const Eigen::VectorXd& v, Eigen::VectorXd* out) {
+  if (!set_up_) throw std::logic_error("EfgModel::apply_tangent before setup_system");
+  // (K_n + K^alpha_n) v of eq. 20 without the matrix: sum_q w_q B_i^T E_k,q eps_q(v) (eq. 21), then the penalty's
+  // sum_q alpha phi_i u_v(X_q) (eq. 23). The same sums as the assembled tangent's, in another order.
+  weighted_stress_.resize(volume_.size());
+  parallel_for(volume_.size(), 512, [&](int q) {
+    weighted_stress_[q] = volume_.weights[q] * (tangent_[q] * strain_at(volume_, q, v));
+  });
+  add_test_gradient_sums(weighted_stress_, out);
+  const ShapeTable& sv = surface_;
+  for (int q = 0; q < sv.size(); ++q) {
+    const double c = boundary_.penalty_weight[q];
+    if (c == 0.0) continue;
+    Eigen::Vector3d value = Eigen::Vector3d::Zero();
+    for (int s = sv.begin(q); s < sv.end(q); ++s) value += sv.phi[s] * v.segment<3>(3 * sv.nodes[s]);
+    for (int s = sv.begin(q); s < sv.end(q); ++s) out->segment<3>(3 * sv.nodes[s]) += (c * sv.phi[s]) * value;
+  }
 }
 
 void EfgModel::assemble_system(bool with_matrix) {
@@ -757,19 +789,31 @@ void EfgModel::assemble_system(bool with_matrix) {
 }
 
 void EfgModel::solve(double tolerance) {
-  if (!linear_solver_ || (!matrix_current_ && !linear_solver_->prepared()))
+  if (!linear_solver_ || (!matrix_current_ && !tangent_by_points_ && !linear_solver_->prepared()))
     throw std::logic_error("EfgModel::solve without an assembled matrix");
   last_solve_prepared_ = false;
+  const bool by_points = tangent_by_points_;
+  tangent_by_points_ = false;
   if (!linear_solver_->prepared()) {
     // A newer tangent than the factors: GMRES preconditioned by them costs a few back-substitutions, a fresh
     // factorisation tens of seconds on the lung (docs/MESHLESS.md §2). factorised_dt_ stays that of the factors.
-    if (std::optional<Eigen::VectorXd> du =
-            linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations,
-                                                       tolerance)) {
+    std::optional<Eigen::VectorXd> du;
+    if (by_points) {
+      const EfgLinearSolver::LinearOperator tangent = [this](const Eigen::VectorXd& v, Eigen::VectorXd* out) {
+        apply_tangent(v, out);
+      };
+      du = linear_solver_->solve_with_earlier_factors(tangent, -residual_, options_.earlier_factors_max_iterations,
+                                                      tolerance);
+    } else {
+      du = linear_solver_->solve_with_earlier_factors(matrix_, -residual_, options_.earlier_factors_max_iterations,
+                                                      tolerance);
+    }
+    if (du) {
       u_ += *du;
       last_linear_iterations_ = linear_solver_->last_iterations();
       return;
     }
+    if (by_points) assemble_system(true);  // the factorisation needs this iterate's matrix
     linear_solver_->prepare(matrix_);
     last_solve_prepared_ = true;
     stats_.linear_solver = linear_solver_->description();  // a multigrid reports its levels once built
@@ -929,7 +973,16 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
                               options_.max_newton_iterations)) {
       t0 = std::chrono::steady_clock::now();
       try {
-        assemble_system(true);
+        if (linear_solver_->has_factors()) {
+          // GMRES on the kept factors applies this tangent point by point (apply_tangent), at about the cost of a
+          // residual: only the law's tangent at each point is needed, not the matrix (1.3 s on lung_small).
+          update_material(current_dt_, true);
+          tangent_by_points_ = true;
+          matrix_current_ = false;
+          linear_solver_->invalidate();
+        } else {
+          assemble_system(true);
+        }
       } catch (const std::runtime_error& e) {
         attempt.failure = e.what();
         break;

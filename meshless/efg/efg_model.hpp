@@ -116,6 +116,10 @@ class EfgModel {
   /// R = f_int + K^alpha U - alpha int phi u-bar - s(t) f_t (eq. 24) and, if with_matrix, the tangent
   /// K_n + K^alpha_n of eq. 20 with the consistent E_k (eq. 21).
   void assemble_system(bool with_matrix);
+  /// *out = (K_n + K^alpha_n) v, the tangent of the last material update with its tangent (assemble_system(true),
+  /// or a refresh on kept factors) applied to v without assembling it: the same sums as the matrix, point by point,
+  /// at about the cost of a residual. GMRES on kept factors uses it, so that a refresh costs no assembly.
+  void apply_tangent(const Eigen::VectorXd& v, Eigen::VectorXd* out);
   /// Solve (K_n + K^alpha_n) dU = -R (eq. 20) and update U (eq. 14). Throws if dU is not finite.
   /// @param tolerance  the relative residual a GMRES solve on earlier factors must reach (an inexact Newton step);
   ///                   0: EfgOptions::iterative_tolerance. A direct solve on current factors is exact either way.
@@ -192,6 +196,8 @@ class EfgModel {
   void update_material(double dt, bool with_tangent);
   /// residual_ = the internal forces, eq. 21's int B_i^T sigma at the current stresses (update_material first).
   void add_internal_forces();
+  /// *out = sum_q B_i(X_q)^T weighted_q per node i (test gradients with VCI), point by point.
+  void add_test_gradient_sums(const std::vector<core::Vector6>& weighted, Eigen::VectorXd* out);
   /// The last material update's weakest point as an error when it is outside the admissible range, else null.
   std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate() const;
   /// One Newton solve from the committed state at t_from to t_to; commits the history when it converges and
@@ -248,7 +254,11 @@ class EfgModel {
   std::vector<core::KelvinState> states_;   // history at t_n, one per volume point
   std::vector<core::Vector6> strain_, stress_;
   std::vector<core::Matrix6> tangent_;
-  Eigen::MatrixXd force_blocks_;  // 3N by blocks: scratch of add_internal_forces, kept to spare its allocation
+  Eigen::MatrixXd force_blocks_;  // 3N by blocks: scratch of add_test_gradient_sums, kept to spare its allocation
+  std::vector<core::Vector6> weighted_stress_;  // per volume point: scratch of the same
+  // The refreshed tangent of this iterate is in tangent_ (per point), not in matrix_: solve() applies it point by
+  // point (apply_tangent) and assembles matrix_ only if it has to factorise.
+  bool tangent_by_points_ = false;
 
   Eigen::VectorXd u_, residual_, external_;
   SparseMatrix matrix_;

@@ -13,6 +13,61 @@
 #include "meshless/solvers/available_memory.hpp"
 #include "meshless/solvers/direct_solver_estimate.hpp"
 
+namespace meshless::detail {
+class OperatorMatrix;
+}  // namespace meshless::detail
+
+// Eigen reads a matrix type's traits when the type is defined (EigenBase): they come first.
+namespace Eigen::internal {
+template <>
+struct traits<meshless::detail::OperatorMatrix> : public traits<Eigen::SparseMatrix<double>> {};
+}  // namespace Eigen::internal
+
+namespace meshless::detail {
+
+/// A matrix known only by its product with a vector, in the form Eigen's iterative solvers take (Eigen's
+/// "matrix-free solvers" recipe: an EigenBase whose product is implemented below).
+class OperatorMatrix : public Eigen::EigenBase<OperatorMatrix> {
+ public:
+  using Scalar = double;
+  using RealScalar = double;
+  using StorageIndex = int;
+  enum { ColsAtCompileTime = Eigen::Dynamic, MaxColsAtCompileTime = Eigen::Dynamic, IsRowMajor = false };
+  OperatorMatrix(const EfgLinearSolver::LinearOperator& apply, Eigen::Index size) : apply_(&apply), size_(size) {}
+  Eigen::Index rows() const { return size_; }
+  Eigen::Index cols() const { return size_; }
+  template <typename Rhs>
+  Eigen::Product<OperatorMatrix, Rhs, Eigen::AliasFreeProduct> operator*(const Eigen::MatrixBase<Rhs>& x) const {
+    return Eigen::Product<OperatorMatrix, Rhs, Eigen::AliasFreeProduct>(*this, x.derived());
+  }
+  void apply(const Eigen::VectorXd& x, Eigen::VectorXd* y) const { (*apply_)(x, y); }
+
+ private:
+  const EfgLinearSolver::LinearOperator* apply_;
+  Eigen::Index size_;
+};
+
+}  // namespace meshless::detail
+
+namespace Eigen::internal {
+
+template <typename Rhs>
+struct generic_product_impl<meshless::detail::OperatorMatrix, Rhs, SparseShape, DenseShape, GemvProduct>
+    : generic_product_impl_base<meshless::detail::OperatorMatrix, Rhs,
+                                generic_product_impl<meshless::detail::OperatorMatrix, Rhs>> {
+  using Scalar = typename Product<meshless::detail::OperatorMatrix, Rhs>::Scalar;
+  template <typename Dest>
+  static void scaleAndAddTo(Dest& dst, const meshless::detail::OperatorMatrix& lhs, const Rhs& rhs,
+                            const Scalar& alpha) {
+    const Eigen::VectorXd x = rhs;
+    Eigen::VectorXd y;
+    lhs.apply(x, &y);
+    dst += alpha * y;
+  }
+};
+
+}  // namespace Eigen::internal
+
 namespace meshless {
 
 struct EfgLinearSolver::Umfpack {
@@ -163,8 +218,17 @@ std::optional<Eigen::VectorXd> EfgLinearSolver::solve_with_earlier_factors(const
                                                                            const Eigen::VectorXd& rhs,
                                                                            int max_iterations,
                                                                            double tolerance) {
+  const LinearOperator product = [&a](const Eigen::VectorXd& x, Eigen::VectorXd* y) { y->noalias() = a * x; };
+  return solve_with_earlier_factors(product, rhs, max_iterations, tolerance);
+}
+
+std::optional<Eigen::VectorXd> EfgLinearSolver::solve_with_earlier_factors(const LinearOperator& a,
+                                                                           const Eigen::VectorXd& rhs,
+                                                                           int max_iterations,
+                                                                           double tolerance) {
   if (!factored_ || max_iterations <= 0) return std::nullopt;
-  Eigen::GMRES<SparseMatrix, EarlierFactors> gmres;
+  const detail::OperatorMatrix matrix(a, rhs.size());
+  Eigen::GMRES<detail::OperatorMatrix, EarlierFactors> gmres;
   gmres.preconditioner().back_substitute = [this](const Eigen::VectorXd& b) -> Eigen::VectorXd {
     if (kind_ == LinearSolverKind::direct) return mumps_->solve(b);
     return umfpack_->lu.solve(b);
@@ -172,7 +236,7 @@ std::optional<Eigen::VectorXd> EfgLinearSolver::solve_with_earlier_factors(const
   gmres.setTolerance(tolerance > 0.0 ? tolerance : options_.iterative_tolerance);
   gmres.setMaxIterations(max_iterations);
   gmres.set_restart(max_iterations);
-  gmres.compute(a);
+  gmres.compute(matrix);
   Eigen::VectorXd x = gmres.solve(rhs);
   last_iterations_ = static_cast<int>(gmres.iterations());
   if (gmres.info() != Eigen::Success || !x.allFinite()) return std::nullopt;

@@ -5,6 +5,7 @@
 // multigrid), or Jacobi-BiCGSTAB), prepares it once per matrix (factorisation or preconditioner set-up) and then
 // solves any number of right-hand sides with it (the model's tangent reuse, docs/MESHLESS.md §2).
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -52,6 +53,14 @@ class EfgLinearSolver {
   /// right-hand sides reuse them.
   std::optional<Eigen::VectorXd> solve_with_earlier_factors(const SparseMatrix& a, const Eigen::VectorXd& rhs,
                                                             int max_iterations, double tolerance);
+  /// *y = A x for a matrix A that is not assembled (the EFG tangent applied point by point, EfgModel::apply_tangent).
+  using LinearOperator = std::function<void(const Eigen::VectorXd& x, Eigen::VectorXd* y)>;
+  /// The same for a matrix given by its product with a vector: it must be a matrix of the factors' pattern all the
+  /// same (a newer tangent), which the caller assembles and prepares when this returns std::nullopt.
+  std::optional<Eigen::VectorXd> solve_with_earlier_factors(const LinearOperator& a, const Eigen::VectorXd& rhs,
+                                                            int max_iterations, double tolerance);
+  /// True when a direct solver's factors exist, prepared or not: solve_with_earlier_factors() can use them.
+  bool has_factors() const { return factored_; }
   /// x with A x = rhs for the prepared A. Throws std::runtime_error when the iterative method does not reach
   /// options.iterative_tolerance within options.iterative_max_iterations, or the result is not finite.
   Eigen::VectorXd solve(const Eigen::VectorXd& rhs);
