@@ -690,13 +690,22 @@ void EfgModel::apply_tangent(const Eigen::VectorXd& v, Eigen::VectorXd* out) {
   });
   add_test_gradient_sums(weighted_stress_, out);
   const ShapeTable& sv = surface_;
+  const std::vector<Eigen::Vector3d> v_surface = penalised_surface_values(v);
   for (int q = 0; q < sv.size(); ++q) {
     const double c = boundary_.penalty_weight[q];
     if (c == 0.0) continue;
-    Eigen::Vector3d value = Eigen::Vector3d::Zero();
-    for (int s = sv.begin(q); s < sv.end(q); ++s) value += sv.phi[s] * v.segment<3>(3 * sv.nodes[s]);
-    for (int s = sv.begin(q); s < sv.end(q); ++s) out->segment<3>(3 * sv.nodes[s]) += (c * sv.phi[s]) * value;
+    for (int s = sv.begin(q); s < sv.end(q); ++s) out->segment<3>(3 * sv.nodes[s]) += (c * sv.phi[s]) * v_surface[q];
   }
+}
+
+std::vector<Eigen::Vector3d> EfgModel::penalised_surface_values(const Eigen::VectorXd& u) const {
+  const ShapeTable& sv = surface_;
+  std::vector<Eigen::Vector3d> values(sv.size(), Eigen::Vector3d::Zero());
+  for (int q = 0; q < sv.size(); ++q) {
+    if (boundary_.penalty_weight[q] == 0.0) continue;
+    for (int s = sv.begin(q); s < sv.end(q); ++s) values[q] += sv.phi[s] * u.segment<3>(3 * sv.nodes[s]);
+  }
+  return values;
 }
 
 void EfgModel::assemble_system(bool with_matrix) {
@@ -705,11 +714,7 @@ void EfgModel::assemble_system(bool with_matrix) {
 
   // u-bar mismatch of the penalty term needs u(X_q) = sum phi_j U_j at the penalised boundary points.
   const ShapeTable& sv = surface_;
-  std::vector<Eigen::Vector3d> u_surface(sv.size(), Eigen::Vector3d::Zero());
-  for (int q = 0; q < sv.size(); ++q) {
-    if (boundary_.penalty_weight[q] == 0.0) continue;
-    for (int s = sv.begin(q); s < sv.end(q); ++s) u_surface[q] += sv.phi[s] * u_.segment<3>(3 * sv.nodes[s]);
-  }
+  const std::vector<Eigen::Vector3d> u_surface = penalised_surface_values(u_);
 
   // The internal forces point by point (eq. 21's int B_i^T sigma): they read the shape-function table in its order.
   add_internal_forces();
@@ -963,10 +968,11 @@ core::NewtonAttempt EfgModel::newton_iterations(double t_from, double t_to, cons
       attempt.failure = "the iteration limit (max_newton_iterations) was reached";
       break;
     }
-    // The kept factors were too slow over the last update: the tangent of this iterate is assembled now and solved
-    // in this iteration, rather than after one more update on the factors that just proved slow (a residual and a
-    // back-substitution that gain little). The residual is assembled again with it (the same ||R||: the same
-    // iterate). The next iteration goes back to the kept factors and is watched afresh.
+    // The kept factors were too slow over the last update: the tangent of this iterate is taken now and solved in
+    // this iteration, rather than after one more update on the factors that just proved slow (a residual and a
+    // back-substitution that gain little). With factors at hand only the law's tangent is updated (GMRES applies it
+    // point by point); otherwise the matrix is assembled, with the residual again (the same iterate). The next
+    // iteration goes back to the kept factors and is watched afresh.
     bool refreshed = false;
     if (!constant_tangent && reuse &&
         kept_factors_too_slow(r, last, last, 1, target, it, options_.refactor_contraction,

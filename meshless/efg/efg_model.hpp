@@ -196,6 +196,8 @@ class EfgModel {
   void update_material(double dt, bool with_tangent);
   /// residual_ = the internal forces, eq. 21's int B_i^T sigma at the current stresses (update_material first).
   void add_internal_forces();
+  /// u(X_q) = sum_j phi_j(X_q) u_j at every surface point that carries the penalty (eq. 23); zero at the others.
+  std::vector<Eigen::Vector3d> penalised_surface_values(const Eigen::VectorXd& u) const;
   /// *out = sum_q B_i(X_q)^T weighted_q per node i (test gradients with VCI), point by point.
   void add_test_gradient_sums(const std::vector<core::Vector6>& weighted, Eigen::VectorXd* out);
   /// The last material update's weakest point as an error when it is outside the admissible range, else null.
