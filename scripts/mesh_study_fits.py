@@ -12,14 +12,59 @@ component over the last N levels,
 and prints each fit's residual and the distance of the finest level from its u* (RMS over the samples, relative to
 the largest sample displacement). Reads results/verify/fem.json (or the file given). Needs python3-numpy.
 
+It also prints the observed orders of two groups of samples apart: those within the graded ball under the probe
+(1.5 load radii of the load centre, where the FEM's local size is GeometrySpec::load_patch_size, which falls like
+h^g with /geometry/refinement/load_patch_grading g) and those beyond it (where the size grows to h over one more load
+radius, so it falls like h). The two groups are refined at different rates, so one order over all samples mixes
+them. The sample points and the load centre come from `build/bin/tissue case check` on the study's config (run
+from the repository's root, after the build).
+
     /usr/bin/python3 scripts/mesh_study_fits.py [results/verify/fem.json]
 """
 import json
+import re
+import subprocess
 import sys
 
 import numpy as np
 
 FITS = [("h^2", [2]), ("h^3", [3]), ("h^2 + h^3", [2, 3])]
+
+
+def observed_orders(h, u):
+    """The observed order of each consecutive three levels, from the norms of the differences of `u` (levels by
+    values)."""
+    orders = []
+    for i in range(len(h) - 2):
+        ratio = 0.5 * (h[i] / h[i + 1] + h[i + 1] / h[i + 2])
+        orders.append(np.log(np.linalg.norm(u[i + 1] - u[i]) / np.linalg.norm(u[i + 2] - u[i + 1])) / np.log(ratio))
+    return orders
+
+
+def samples_and_centre(config):
+    """The sample points and the load centre [mm] that `tissue case check` prints for `config`."""
+    text = subprocess.run(["build/bin/tissue", "case", "check", config], check=True, capture_output=True,
+                          text=True).stdout
+    number = r"(-?\d+(?:\.\d+)?)"
+    points = [[float(x) for x in m] for m in re.findall(rf"^\s+\d+\s+\(\s*{number},\s*{number},\s*{number}\)",
+                                                       text, re.M)]
+    centre = re.search(rf"^load centre\s+\(\s*{number},\s*{number},\s*{number}\)", text, re.M)
+    return np.array(points), np.array([float(x) for x in centre.groups()])
+
+
+def print_group_orders(study, h, u):
+    with open(study["config"]) as f:
+        radius = json.load(f)["load"]["radius"]
+    points, centre = samples_and_centre(study["config"])
+    distance = np.linalg.norm(points - centre, axis=1)
+    by_sample = u.reshape(len(h), -1, 3)
+    for name, chosen in [("within 1.5 load radii (local size ~ h^g)", distance <= 1.5 * radius),
+                         ("beyond 1.5 load radii (local size ~ h)", distance > 1.5 * radius)]:
+        if chosen.sum() == 0:
+            continue
+        orders = observed_orders(h, by_sample[:, chosen, :].reshape(len(h), -1))
+        print(f"  samples {name}: {chosen.sum()} of {len(distance)}, observed orders "
+              f"{', '.join(f'{x:.2f}' for x in orders)}")
 
 
 def main(path):
@@ -31,10 +76,9 @@ def main(path):
         u = np.array([np.ravel(level["sample_displacements_mm"]) for level in levels])
         peak = np.max(np.linalg.norm(u[-1].reshape(-1, 3), axis=1))
         print(f"{case}: levels {', '.join(f'{x:g}' for x in h)} mm; peak sample displacement {peak:.4f} mm")
-        for i in range(len(h) - 2):
-            ratio = 0.5 * (h[i] / h[i + 1] + h[i + 1] / h[i + 2])
-            order = np.log(np.linalg.norm(u[i + 1] - u[i]) / np.linalg.norm(u[i + 2] - u[i + 1])) / np.log(ratio)
+        for i, order in enumerate(observed_orders(h, u)):
             print(f"  observed order over {h[i]:g} / {h[i + 1]:g} / {h[i + 2]:g} mm: {order:.2f}")
+        print_group_orders(study, h, u)
         print("  | fit | levels | residual RMS [mm] | finest level from u* (RMS) |")
         print("  |---|---|---|---|")
         for name, powers in FITS:
