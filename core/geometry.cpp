@@ -15,6 +15,7 @@
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_mesh.hpp"
 #include "core/gmsh_session.hpp"
+#include "core/load_patch_zone.hpp"
 #include "core/mesh_ordering.hpp"
 #include "core/stl_file.hpp"
 #include "core/stl_solid.hpp"
@@ -331,8 +332,9 @@ int add_curve_threshold_field(const std::vector<double>& curves, double fine, do
 
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
 /// of a mesh study refines there too (model units, mm):
-///  * elements of load_patch_refinement * size within 1.5 r of the load centre (the FEM mesh: GeometrySpec::
-///    load_patch_size, graded by load_patch_grading): the patch, its edge (where the traction jumps) and the samples;
+///  * elements of load_patch_refinement * size within kLoadPatchBallRadii * r of the load centre
+///    (core/load_patch_zone.hpp; the FEM mesh: GeometrySpec::load_patch_size, graded by load_patch_grading): the
+///    patch, its edge (where the traction jumps) and the samples;
 ///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
 ///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
 ///    counts this costs);
@@ -343,7 +345,8 @@ void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double si
   const double r = c.load.radius / 1e-3;
   const double patch_size =
       fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
-  std::vector<double> fields{static_cast<double>(add_ball_field(load_centre / 1e-3, 1.5 * r, r, patch_size, size))};
+  std::vector<double> fields{
+      static_cast<double>(add_ball_field(load_centre / 1e-3, kLoadPatchBallRadii * r, r, patch_size, size))};
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const std::vector<double> edge = clamp_edge_curves(c);
     if (!edge.empty()) fields.push_back(add_curve_threshold_field(edge, c.geometry.fixed_region_refinement * size, size));

@@ -16,8 +16,10 @@ It also prints the observed orders of two groups of samples apart: those within 
 (1.5 load radii of the load centre, where the FEM's local size is GeometrySpec::load_patch_size, which falls like
 h^g with /geometry/refinement/load_patch_grading g) and those beyond it (where the size grows to h over one more load
 radius, so it falls like h). The two groups are refined at different rates, so one order over all samples mixes
-them. The sample points and the load centre come from `build/bin/tissue case check` on the study's config (run
-from the repository's root, after the build).
+them (`tissue verify fem` prints the same orders, "By zone", and writes them as
+richardson.observed_orders_by_zone). The sample points and the load centre come from the study's sample_points_mm
+and load_centre_mm, or, for a study written before those were, from `build/bin/tissue case check` on its config
+(run from the repository's root, after the build).
 
     /usr/bin/python3 scripts/mesh_study_fits.py [results/verify/fem.json]
 """
@@ -53,9 +55,13 @@ def samples_and_centre(config):
 
 
 def print_group_orders(study, h, u):
-    with open(study["config"]) as f:
-        radius = json.load(f)["load"]["radius"]
-    points, centre = samples_and_centre(study["config"])
+    if "sample_points_mm" in study:  # written by `tissue verify fem` since the zones were added
+        points, centre = np.array(study["sample_points_mm"]), np.array(study["load_centre_mm"])
+        radius = study["load_radius_mm"]
+    else:
+        with open(study["config"]) as f:
+            radius = json.load(f)["load"]["radius"]
+        points, centre = samples_and_centre(study["config"])
     distance = np.linalg.norm(points - centre, axis=1)
     by_sample = u.reshape(len(h), -1, 3)
     for name, chosen in [("within 1.5 load radii (local size ~ h^g)", distance <= 1.5 * radius),

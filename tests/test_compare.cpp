@@ -263,6 +263,38 @@ TEST(MeshStudyEstimate, FourLevelsReportTheOrderOfEachThree) {
   for (const auto& p : e.json["observed_orders"]) EXPECT_NEAR(p.get<double>(), 2.0, 1e-9);
 }
 
+// A graded load patch refines the samples within its ball like h^2 and those beyond like h, so the study's levels
+// hold two groups converging at different orders; one order over all rows mixes them (2.6 on lung_large between the
+// 2 and 3 of its groups), and each group's own rows give back its order.
+TEST(MeshStudyEstimate, EachGroupOfSamplesGivesItsOwnOrder) {
+  const std::vector<double> h_mm{40.5, 27, 18, 12};
+  Eigen::MatrixXd exact(3, 3), c(3, 3);
+  exact << 1.0, 2.0, 3.0, -1.0, 0.5, 2.0, 0.2, 0.1, -0.3;
+  c << 0.3, -0.2, 0.1, 0.05, 0.2, -0.1, -0.4, 0.1, 0.2;
+  std::vector<Eigen::MatrixXd> u;
+  for (double h : h_mm) {
+    Eigen::MatrixXd level = exact;
+    level.row(0) += 10.0 * std::pow(h / 100.0, 3.0) * c.row(0);  // within the ball: order 3, larger at these h
+    level.row(1) += std::pow(h / 100.0, 2.0) * c.row(1);  // beyond it: order 2
+    level.row(2) += std::pow(h / 100.0, 2.0) * c.row(2);
+    u.push_back(level);
+  }
+  const std::vector<double> within = experiments::observed_orders(u, h_mm, {0});
+  const std::vector<double> beyond = experiments::observed_orders(u, h_mm, {1, 2});
+  ASSERT_EQ(within.size(), 2u);
+  ASSERT_EQ(beyond.size(), 2u);
+  for (double p : within) EXPECT_NEAR(p, 3.0, 1e-9);
+  for (double p : beyond) EXPECT_NEAR(p, 2.0, 1e-9);
+  // All rows: the mix, between the two and falling toward the lower order as h falls (2.902, then 2.804), as
+  // estimate_remaining_error reports it.
+  const std::vector<double> all = experiments::observed_orders(u, h_mm, {0, 1, 2});
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_NEAR(all[0], 2.902, 1e-3);
+  EXPECT_NEAR(all[1], 2.804, 1e-3);
+  const MeshStudyEstimate e = estimate_remaining_error(u, h_mm, 2.0);
+  for (std::size_t l = 0; l < all.size(); ++l) EXPECT_NEAR(all[l], e.json["observed_orders"][l].get<double>(), 1e-12);
+}
+
 TEST(CompareSummary, EachModelsCutEffectAgainstTheFems) {
   experiments::Comparison c = synthetic_comparison(false);
   Eigen::MatrixXd fem_effect = Eigen::MatrixXd::Zero(3, 3), enr_effect = fem_effect, vis_effect = fem_effect;

@@ -11,6 +11,7 @@
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
+#include "core/load_patch_zone.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/models/efg/meshless_runs.hpp"
 #include "experiments/models/lrpim/lrpim_case_model.hpp"
@@ -119,6 +120,10 @@ struct LungLevel {
   double h_mm = 0.0;
   reference_fem::FemRunResult run;
   std::string error;  ///< non-empty when the solve failed (e.g. Newton did not converge)
+  /// Where the samples lie, for their grouping by the refined ball (the same at every level: they are chosen on
+  /// the reference surface) [m].
+  core::PointMatrix sample_points;
+  Eigen::Vector3d load_centre = Eigen::Vector3d::Zero();
 };
 
 /// Solve every case at every mesh size, one after the other: Gmsh is a process-wide singleton, and the FEM's
@@ -138,9 +143,10 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
     }
     for (std::size_t i = 0; i < cases.size(); ++i) {
       try {
-        levels[i].push_back({h, reference_fem::run_case(cases[i], geometries[i])});
+        levels[i].push_back({h, reference_fem::run_case(cases[i], geometries[i]), "", geometries[i].sample_points,
+                             geometries[i].load_centre});
       } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
-        levels[i].push_back({h, {}, e.what()});
+        levels[i].push_back({h, {}, e.what(), geometries[i].sample_points, geometries[i].load_centre});
         std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, h, e.what());
         continue;
       }
@@ -150,6 +156,35 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
     }
   }
   return levels;
+}
+
+/// The observed orders of the samples within core::kLoadPatchBallRadii load radii of the load centre and of those
+/// beyond, apart (experiments::observed_orders): with a graded load patch the two groups are refined at different
+/// rates. Null when either group is empty. The JSON has a "sentence" for fem.md.
+nlohmann::json orders_by_zone(const core::Case& c, const LungLevel& level, const std::vector<Eigen::MatrixXd>& u,
+                              const std::vector<double>& h_mm) {
+  const double ball = core::kLoadPatchBallRadii * c.load.radius;
+  std::vector<Eigen::Index> within, beyond;
+  for (Eigen::Index i = 0; i < level.sample_points.rows(); ++i)
+    (level.sample_points.row(i).transpose() - level.load_centre).norm() <= ball ? within.push_back(i)
+                                                                              : beyond.push_back(i);
+  if (within.empty() || beyond.empty()) return nullptr;
+  const std::vector<double> orders_within = observed_orders(u, h_mm, within);
+  const std::vector<double> orders_beyond = observed_orders(u, h_mm, beyond);
+  auto listed = [](const std::vector<double>& orders) {
+    std::vector<std::string> s;
+    for (double p : orders) s.push_back(p > 0 ? fmt::format("{:.2f}", p) : "none (not decreasing)");
+    return fmt::format("{}", fmt::join(s, ", "));
+  };
+  return {{"ball_radius_mm", ball * 1e3},
+          {"within", {{"samples", within}, {"observed_orders", orders_within}}},
+          {"beyond", {{"samples", beyond}, {"observed_orders", orders_beyond}}},
+          {"sentence",
+           fmt::format("By zone (the refined ball of {:.1f} mm about the load centre, where the local size falls like "
+                       "h^{:g}; beyond it like h): observed orders {} for the {} samples within, {} for the {} "
+                       "beyond.",
+                       ball * 1e3, c.geometry.load_patch_grading, listed(orders_within), within.size(),
+                       listed(orders_beyond), beyond.size())}};
 }
 
 nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& config, const core::Case& c,
@@ -222,14 +257,28 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
       richardson["extrapolated_sample_displacements_mm"] = samples;
     }
     *md += "\n" + estimate.sentence + "\n";
+    if (nlohmann::json zones = orders_by_zone(c, levels.back(), u, h_mm); !zones.is_null()) {
+      *md += zones["sentence"].get<std::string>() + "\n";
+      zones.erase("sentence");
+      richardson["observed_orders_by_zone"] = zones;
+    }
   }
   *md += converged.is_null()
              ? fmt::format("Not converged to {:.0f} % within these levels.\n\n", opt.converged_change * 100)
              : fmt::format("Converged (< {:.0f} % change at the next level) at mesh size **{} mm**.\n\n",
                            opt.converged_change * 100, converged.get<double>());
+  nlohmann::json sample_points = nlohmann::json::array();
+  if (!levels.empty())
+    for (Eigen::Index i = 0; i < levels.front().sample_points.rows(); ++i)
+      sample_points.push_back({levels.front().sample_points(i, 0) * 1e3, levels.front().sample_points(i, 1) * 1e3,
+                               levels.front().sample_points(i, 2) * 1e3});
+  const Eigen::Vector3d centre_mm = levels.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(levels.front().load_centre * 1e3);
   return {{"config", config},
           {"case", c.name},
           {"degree", c.fem.degree},
+          {"sample_points_mm", sample_points},
+          {"load_centre_mm", {centre_mm.x(), centre_mm.y(), centre_mm.z()}},
+          {"load_radius_mm", c.load.radius * 1e3},
           {"levels", rows},
           {"richardson", richardson},
           {"converged_mesh_size_mm", converged},

@@ -16,6 +16,11 @@ double observed_order(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, const 
   return d2 > 0 && d1 > d2 ? std::log(d1 / d2) / std::log(ratio) : 0.0;
 }
 
+/// The refinement ratio of levels l - 2, l - 1, l: the mean of its two steps.
+double ratio_ending_at(const std::vector<double>& h_mm, std::size_t l) {
+  return 0.5 * (h_mm[l - 2] / h_mm[l - 1] + h_mm[l - 1] / h_mm[l]);
+}
+
 }  // namespace
 
 double expected_sample_order(const core::Case& c) {
@@ -33,10 +38,9 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
   if (u.size() < 3) return e;
   const std::size_t n = u.size();
   nlohmann::json orders = nlohmann::json::array();
-  for (std::size_t l = 2; l < n; ++l)
-    orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], 0.5 * (h_mm[l - 2] / h_mm[l - 1] + h_mm[l - 1] / h_mm[l])));
+  for (std::size_t l = 2; l < n; ++l) orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], ratio_ending_at(h_mm, l)));
   const double d2 = (u[n - 1] - u[n - 2]).norm(), finest = u[n - 1].norm();
-  const double ratio = 0.5 * (h_mm[n - 3] / h_mm[n - 2] + h_mm[n - 2] / h_mm[n - 1]);
+  const double ratio = ratio_ending_at(h_mm, n - 1);
   const double p = orders.back().get<double>();
   if (d2 == 0.0) {
     e.json = {{"note", "the last two levels agree exactly"}};
@@ -74,6 +78,17 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
                            "not a bound.",
                            why, assumed, 100 * error);
   return e;
+}
+
+std::vector<double> observed_orders(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                    const std::vector<Eigen::Index>& rows) {
+  if (u.size() != h_mm.size()) throw std::invalid_argument("observed_orders: one mesh size per level");
+  std::vector<Eigen::MatrixXd> chosen;
+  for (const Eigen::MatrixXd& level : u) chosen.push_back(level(rows, Eigen::all));
+  std::vector<double> orders;
+  for (std::size_t l = 2; l < chosen.size(); ++l)
+    orders.push_back(observed_order(chosen[l - 2], chosen[l - 1], chosen[l], ratio_ending_at(h_mm, l)));
+  return orders;
 }
 
 }  // namespace experiments

@@ -51,4 +51,12 @@ struct MeshStudyEstimate {
 MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
                                            double expected_order);
 
+/// The observed order of each consecutive three levels over the rows `rows` of every `u[l]` (one row per sample, as
+/// `estimate_remaining_error` takes them; 0 where the differences do not decrease), so that groups of samples
+/// refined at different rates can be judged apart: a study that grades the load patch refines the samples within
+/// core::kLoadPatchBallRadii of the load centre like h^g and those beyond like h, and one order over all of them
+/// mixes the two (docs/EXPERIMENTS.md, "Why no single order settles"). Empty with fewer than three levels.
+std::vector<double> observed_orders(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
+                                    const std::vector<Eigen::Index>& rows);
+
 }  // namespace experiments
