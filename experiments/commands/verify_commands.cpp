@@ -115,6 +115,13 @@ nlohmann::json verify_cantilever(const VerifyFemOptions& opt, Progress* progress
   return {{"levels", rows}, {"l2_rate", rate}, {"expected_rate", 3.0}, {"pass", rate >= 2.5}};
 }
 
+/// The rows of an n x 3 matrix in metres as a JSON array of [x, y, z] in mm.
+nlohmann::json rows_in_mm(const Eigen::MatrixXd& m) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (Eigen::Index i = 0; i < m.rows(); ++i) rows.push_back({m(i, 0) * 1e3, m(i, 1) * 1e3, m(i, 2) * 1e3});
+  return rows;
+}
+
 /// One mesh level of one case.
 struct LungLevel {
   double h_mm = 0.0;
@@ -215,10 +222,6 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
                        change ? fmt::format("{:.2f} %", *change * 100) : "", r.probe_strain.mean * 100,
                        r.probe_strain.peak * 100, r.support_edge_strain.mean * 100, r.support_edge_strain.peak * 100,
                        r.total_seconds);
-    nlohmann::json samples = nlohmann::json::array();
-    for (Eigen::Index i = 0; i < r.sample_displacements.rows(); ++i)
-      samples.push_back({r.sample_displacements(i, 0) * 1e3, r.sample_displacements(i, 1) * 1e3,
-                         r.sample_displacements(i, 2) * 1e3});
     rows.push_back({{"mesh_size_mm", h},
                     {"n_cells", r.n_cells},
                     {"n_dofs", r.n_dofs},
@@ -230,7 +233,7 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
                     {"support_edge_strain_peak", r.support_edge_strain.peak},
                     {"support_edge_band_mm", reference_fem::kSupportEdgeBand * 1e3},
                     {"seconds", r.total_seconds},
-                    {"sample_displacements_mm", samples},
+                    {"sample_displacements_mm", rows_in_mm(r.sample_displacements)},
                     {"relative_change_to_previous", change ? nlohmann::json(*change) : nlohmann::json()}});
   }
   // Converged: the first level whose samples change by less than the threshold at the next level.
@@ -249,13 +252,8 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
     for (const auto& level : levels) h_mm.push_back(level.h_mm);
     const MeshStudyEstimate estimate = estimate_remaining_error(u, h_mm, expected_sample_order(c));
     richardson = estimate.json;
-    if (estimate.extrapolated.size() > 0) {  // the comparator's `--reference extrapolated`
-      nlohmann::json samples = nlohmann::json::array();
-      for (Eigen::Index i = 0; i < estimate.extrapolated.rows(); ++i)
-        samples.push_back({estimate.extrapolated(i, 0) * 1e3, estimate.extrapolated(i, 1) * 1e3,
-                           estimate.extrapolated(i, 2) * 1e3});
-      richardson["extrapolated_sample_displacements_mm"] = samples;
-    }
+    if (estimate.extrapolated.size() > 0)  // the comparator's `--reference extrapolated`
+      richardson["extrapolated_sample_displacements_mm"] = rows_in_mm(estimate.extrapolated);
     *md += "\n" + estimate.sentence + "\n";
     if (nlohmann::json zones = orders_by_zone(c, levels.back(), u, h_mm); !zones.is_null()) {
       *md += zones["sentence"].get<std::string>() + "\n";
@@ -267,11 +265,7 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
              ? fmt::format("Not converged to {:.0f} % within these levels.\n\n", opt.converged_change * 100)
              : fmt::format("Converged (< {:.0f} % change at the next level) at mesh size **{} mm**.\n\n",
                            opt.converged_change * 100, converged.get<double>());
-  nlohmann::json sample_points = nlohmann::json::array();
-  if (!levels.empty())
-    for (Eigen::Index i = 0; i < levels.front().sample_points.rows(); ++i)
-      sample_points.push_back({levels.front().sample_points(i, 0) * 1e3, levels.front().sample_points(i, 1) * 1e3,
-                               levels.front().sample_points(i, 2) * 1e3});
+  const nlohmann::json sample_points = levels.empty() ? nlohmann::json::array() : rows_in_mm(levels.front().sample_points);
   const Eigen::Vector3d centre_mm = levels.empty() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(levels.front().load_centre * 1e3);
   return {{"config", config},
           {"case", c.name},

@@ -21,6 +21,14 @@ double ratio_ending_at(const std::vector<double>& h_mm, std::size_t l) {
   return 0.5 * (h_mm[l - 2] / h_mm[l - 1] + h_mm[l - 1] / h_mm[l]);
 }
 
+/// The observed order of each consecutive three levels of `u`.
+std::vector<double> orders_of_each_three(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm) {
+  std::vector<double> orders;
+  for (std::size_t l = 2; l < u.size(); ++l)
+    orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], ratio_ending_at(h_mm, l)));
+  return orders;
+}
+
 }  // namespace
 
 double expected_sample_order(const core::Case& c) {
@@ -37,8 +45,7 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
   MeshStudyEstimate e;
   if (u.size() < 3) return e;
   const std::size_t n = u.size();
-  nlohmann::json orders = nlohmann::json::array();
-  for (std::size_t l = 2; l < n; ++l) orders.push_back(observed_order(u[l - 2], u[l - 1], u[l], ratio_ending_at(h_mm, l)));
+  const nlohmann::json orders = orders_of_each_three(u, h_mm);
   const double d2 = (u[n - 1] - u[n - 2]).norm(), finest = u[n - 1].norm();
   const double ratio = ratio_ending_at(h_mm, n - 1);
   const double p = orders.back().get<double>();
@@ -85,10 +92,7 @@ std::vector<double> observed_orders(const std::vector<Eigen::MatrixXd>& u, const
   if (u.size() != h_mm.size()) throw std::invalid_argument("observed_orders: one mesh size per level");
   std::vector<Eigen::MatrixXd> chosen;
   for (const Eigen::MatrixXd& level : u) chosen.push_back(level(rows, Eigen::all));
-  std::vector<double> orders;
-  for (std::size_t l = 2; l < chosen.size(); ++l)
-    orders.push_back(observed_order(chosen[l - 2], chosen[l - 1], chosen[l], ratio_ending_at(h_mm, l)));
-  return orders;
+  return orders_of_each_three(chosen, h_mm);
 }
 
 }  // namespace experiments
