@@ -8,6 +8,7 @@
 #include <string>
 
 #include "core/gmsh_mesh.hpp"
+#include "core/gmsh_size_fields.hpp"
 #include "core/gmsh_session.hpp"
 
 namespace core {
@@ -135,7 +136,7 @@ int tag_crack_faces(const RuledSurface& cut, TetMesh* mesh) {
 }
 
 TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const RuledSurface& cut,
-                           double size) {
+                           double size, double front_size) {
   constexpr double to_m = 1e-3;  // model in mm, like the built-in lung
   GmshSession session;
   gmsh::model::add("cracked_block");
@@ -143,9 +144,14 @@ TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi,
   const int box = gmsh::model::occ::addBox(a.x(), a.y(), a.z(), ext.x(), ext.y(), ext.z());
   gmsh::model::occ::synchronize();
   const CrackEmbedding embedding = embed_cut_in_body({box}, cut, to_m);
+  const bool graded = front_size > 0.0 && front_size < size && !embedding.front_curves.empty();
+  if (graded)
+    gmsh::model::mesh::field::setAsBackgroundMesh(add_curve_threshold_field(
+        std::vector<double>(embedding.front_curves.begin(), embedding.front_curves.end()), front_size / to_m,
+        size / to_m));
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Mesh.MeshSizeMax", size / to_m);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", size / to_m / 4);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", (graded ? std::min(size / 4, front_size) : size / 4) / to_m);
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);
   gmsh::option::setNumber("Mesh.ElementOrder", 1);
   gmsh::model::mesh::generate(3);

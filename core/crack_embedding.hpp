@@ -35,7 +35,10 @@ int tag_crack_faces(const RuledSurface& cut, TetMesh* mesh);
 
 /// A cracked box [lo, hi] (metres) meshed at `size` [m]: boundary faces computed, crack faces tagged,
 /// every other face free_surface (the caller tags fixed/load faces). For tests of the crack pipeline.
+/// When 0 < front_size < size [m], the mesh is refined along the crack's front as the case pipeline refines a
+/// cracked FEM mesh (GeometrySpec::crack_front_size; core/gmsh_size_fields.hpp): front_size there, growing to
+/// `size` over one `size`.
 TetMesh mesh_cracked_block(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, const RuledSurface& cut,
-                           double size);
+                           double size, double front_size = 0.0);
 
 }  // namespace core

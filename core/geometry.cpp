@@ -15,6 +15,7 @@
 #include "core/crack_embedding.hpp"
 #include "core/gmsh_mesh.hpp"
 #include "core/gmsh_session.hpp"
+#include "core/gmsh_size_fields.hpp"
 #include "core/load_patch_zone.hpp"
 #include "core/mesh_ordering.hpp"
 #include "core/stl_file.hpp"
@@ -83,10 +84,12 @@ void orient_outward(TriangleSurface* s) {
     for (int t = 0; t < n; ++t) std::swap(s->triangles(t, 1), s->triangles(t, 2));
 }
 
-void set_mesh_options(double size) {
+/// `finest`: the smallest local size a size field asks for. Gmsh clamps every field to [MeshSizeMin, MeshSizeMax], so
+/// the floor must not cut off a graded region (at h = 5.3 mm the load patch's 1.17 mm would become 1.33 mm).
+void set_mesh_options(double size, double finest = std::numeric_limits<double>::infinity()) {
   gmsh::option::setNumber("General.NumThreads", 1);  // deterministic meshes
   gmsh::option::setNumber("Mesh.MeshSizeMax", size);
-  gmsh::option::setNumber("Mesh.MeshSizeMin", size / 4);
+  gmsh::option::setNumber("Mesh.MeshSizeMin", std::min(size / 4, finest));
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
   gmsh::option::setNumber("Mesh.Algorithm", 6);
   gmsh::option::setNumber("Mesh.Algorithm3D", 1);
@@ -94,10 +97,11 @@ void set_mesh_options(double size) {
   gmsh::option::setNumber("Mesh.ElementOrder", 1);
 }
 
-/// Mesh the current model's volume at `size` (model units) and return linear tets in metres.
+/// Mesh the current model's volume at `size` (model units), its size fields allowed down to `finest` (refine_regions),
+/// and return linear tets in metres.
 /// `after_generate` may edit the mesh before it is read (the FEM crack splits its nodes there).
-TetMesh mesh_volume(double size, double to_m, const std::function<void()>& after_generate = {}) {
-  set_mesh_options(size);
+TetMesh mesh_volume(double size, double finest, double to_m, const std::function<void()>& after_generate = {}) {
+  set_mesh_options(size, finest);
   gmsh::model::mesh::generate(3);
   if (after_generate) after_generate();
   return read_gmsh_tets(to_m);
@@ -316,20 +320,6 @@ std::vector<double> clamp_edge_curves(const Case& c) {
   return curves;
 }
 
-/// A size field of `fine` within `fine` of the curves, growing linearly to `size` at `fine + size` (model units).
-int add_curve_threshold_field(const std::vector<double>& curves, double fine, double size) {
-  const int distance = gmsh::model::mesh::field::add("Distance");
-  gmsh::model::mesh::field::setNumbers(distance, "CurvesList", curves);
-  gmsh::model::mesh::field::setNumber(distance, "NumPointsPerCurve", 200);
-  const int threshold = gmsh::model::mesh::field::add("Threshold");
-  gmsh::model::mesh::field::setNumber(threshold, "InField", distance);
-  gmsh::model::mesh::field::setNumber(threshold, "SizeMin", fine);
-  gmsh::model::mesh::field::setNumber(threshold, "SizeMax", size);
-  gmsh::model::mesh::field::setNumber(threshold, "DistMin", fine);
-  gmsh::model::mesh::field::setNumber(threshold, "DistMax", fine + size);
-  return threshold;
-}
-
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
 /// of a mesh study refines there too (model units, mm):
 ///  * elements of load_patch_refinement * size within kLoadPatchBallRadii * r of the load centre
@@ -340,26 +330,34 @@ int add_curve_threshold_field(const std::vector<double>& curves, double fine, do
 ///    counts this costs);
 ///  * on a cracked FEM mesh, elements of GeometrySpec::crack_front_size along the crack's front, growing to the mesh
 ///    size over one mesh size (when that size is below the mesh size).
-void refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh,
+/// Returns the smallest of these sizes (model units), for the mesher's size floor (set_mesh_options).
+double refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh,
                     const CrackEmbedding* crack) {
   const double r = c.load.radius / 1e-3;
   const double patch_size =
       fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
   std::vector<double> fields{
       static_cast<double>(add_ball_field(load_centre / 1e-3, kLoadPatchBallRadii * r, r, patch_size, size))};
+  double finest = patch_size;
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const std::vector<double> edge = clamp_edge_curves(c);
-    if (!edge.empty()) fields.push_back(add_curve_threshold_field(edge, c.geometry.fixed_region_refinement * size, size));
+    if (!edge.empty()) {
+      fields.push_back(add_curve_threshold_field(edge, c.geometry.fixed_region_refinement * size, size));
+      finest = std::min(finest, c.geometry.fixed_region_refinement * size);
+    }
   }
   if (fem_mesh && crack && c.cut && !crack->front_curves.empty()) {
     const double front_size = c.geometry.crack_front_size(size, c.cut->depth / 1e-3);
-    if (front_size < size)
+    if (front_size < size) {
       fields.push_back(add_curve_threshold_field(
           std::vector<double>(crack->front_curves.begin(), crack->front_curves.end()), front_size, size));
+      finest = std::min(finest, front_size);
+    }
   }
   const int min_field = gmsh::model::mesh::field::add("Min");
   gmsh::model::mesh::field::setNumbers(min_field, "FieldsList", fields);
   gmsh::model::mesh::field::setAsBackgroundMesh(min_field);
+  return finest;
 }
 
 /// Tetrahedra of the case's body at `size` [m]. Both geometry sources become OpenCASCADE solids in mm
@@ -377,10 +375,10 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const std::optional<CrackEmbedding> crack =
       cut ? std::optional(embed_cut_in_body(body, *cut, to_m)) : std::nullopt;
   // After the last fragment, so that the clamp's edge curves are the ones that get meshed.
-  refine_regions(c, load_centre, size / to_m, fem_mesh, crack ? &*crack : nullptr);
+  const double finest = refine_regions(c, load_centre, size / to_m, fem_mesh, crack ? &*crack : nullptr);
   TetMesh mesh;
   try {
-    mesh = mesh_volume(size / to_m, to_m, [&] {
+    mesh = mesh_volume(size / to_m, finest, to_m, [&] {
       if (crack) split_crack_nodes(*crack);
     });
   } catch (const std::string& gmsh_error) {  // the Gmsh SDK throws its last error as a string
