@@ -7,14 +7,12 @@
 #include <iostream>
 #include <map>
 
-#include "core/crack_embedding.hpp"
-#include "reference_fem/fem_model.hpp"
+#include "cracked_block.hpp"
 
 namespace reference_fem {
 namespace {
 
-constexpr double kLx = 0.04, kLy = 0.02, kLz = 0.02;  // [m]
-constexpr double kCutY = 0.01, kCutDepth = 0.01;
+using namespace cracked_block;
 
 struct CrackedBlock {
   core::TetMesh mesh;
@@ -22,35 +20,15 @@ struct CrackedBlock {
 };
 
 CrackedBlock solve_cracked_block(const Eigen::MatrixXd& samples) {
-  // Cut: the plane y = 0.01 from the top face z = Lz down to z = Lz - 0.01, for 0.01 <= x <= 0.03.
-  const core::RuledSurface cut({Eigen::Vector3d(0.01, kCutY, kLz), Eigen::Vector3d(0.03, kCutY, kLz)},
-                               -Eigen::Vector3d::UnitZ(), kCutDepth);
   CrackedBlock b;
-  b.mesh = core::mesh_cracked_block(Eigen::Vector3d::Zero(), Eigen::Vector3d(kLx, kLy, kLz), cut, 0.004);
+  b.mesh = cracked_block::mesh(0.004);
   // y = 0 clamped, y = Ly pulled: the cut is normal to the load, so it opens (mode I).
-  for (int f = 0; f < b.mesh.boundary_faces.rows(); ++f) {
-    double y_max = -1, y_min = 1;
-    for (int k = 0; k < 3; ++k) {
-      const double y = b.mesh.vertices(b.mesh.boundary_faces(f, k), 1);
-      y_max = std::max(y_max, y);
-      y_min = std::min(y_min, y);
-    }
-    if (y_max < 1e-9) b.mesh.face_tags[f] = core::FaceTag::fixed;
-    if (y_min > kLy - 1e-9) b.mesh.face_tags[f] = core::FaceTag::load;
-  }
-  SolverParameters p;
-  p.material.K1 = 6000.0;
-  p.material.K2 = 12000.0;
-  p.material.eta = 18000.0;
-  p.material.nu = 0.3;
-  p.material.k = 0.0;
-  p.degree = 2;
   BoundaryConditions bc;
   bc.dirichlet.push_back(DirichletCondition{});
   TractionCondition pull;
   pull.traction = Eigen::Vector3d(0.0, 60.0, 0.0);  // [Pa]: about 1 % strain
   bc.tractions.push_back(pull);
-  b.result = solve_on_mesh(b.mesh, p, bc, {0.0}, samples, FemRunOptions{});
+  b.result = solve_on_mesh(b.mesh, linear_parameters(), bc, {0.0}, samples, FemRunOptions{});
   return b;
 }
 

@@ -14,45 +14,18 @@
 #include <vector>
 
 #include "core/case.hpp"
-#include "core/crack_embedding.hpp"
-#include "reference_fem/fem_model.hpp"
+#include "cracked_block.hpp"
 
 namespace reference_fem {
 namespace {
 
-constexpr double kLx = 0.04, kLy = 0.02, kLz = 0.02;  // [m]
-constexpr double kCutY = 0.01, kCutDepth = 0.01;
-
 core::TetMesh opened_block(double size, bool graded) {
-  // The plane y = 10 mm from the top face down 10 mm, for 10 <= x <= 30 mm: its front is the bottom edge and the
-  // two vertical edges inside the block.
-  const core::RuledSurface cut({Eigen::Vector3d(0.01, kCutY, kLz), Eigen::Vector3d(0.03, kCutY, kLz)},
-                               -Eigen::Vector3d::UnitZ(), kCutDepth);
   core::GeometrySpec grading;
   grading.crack_front_grading = 2.0;
-  core::TetMesh m = core::mesh_cracked_block(Eigen::Vector3d::Zero(), Eigen::Vector3d(kLx, kLy, kLz), cut, size,
-                                             graded ? grading.crack_front_size(size, kCutDepth) : 0.0);
-  for (int f = 0; f < m.boundary_faces.rows(); ++f) {
-    double y_max = -1, y_min = 1;
-    for (int k = 0; k < 3; ++k) {
-      const double y = m.vertices(m.boundary_faces(f, k), 1);
-      y_max = std::max(y_max, y);
-      y_min = std::min(y_min, y);
-    }
-    if (y_max < 1e-9) m.face_tags[f] = core::FaceTag::fixed;
-    if (y_min > kLy - 1e-9) m.face_tags[f] = core::FaceTag::load;
-  }
-  return m;
+  return cracked_block::mesh(size, graded ? grading.crack_front_size(size, cracked_block::kCutDepth) : 0.0);
 }
 
 Eigen::MatrixXd sample_displacements(const core::TetMesh& m, const Eigen::MatrixXd& samples, std::size_t* dofs) {
-  SolverParameters p;
-  p.material.K1 = 6000.0;
-  p.material.K2 = 12000.0;
-  p.material.eta = 18000.0;
-  p.material.nu = 0.3;
-  p.material.k = 0.0;
-  p.degree = 2;
   BoundaryConditions bc;
   ElasticSupportCondition support;  // on the y = 0 face: about the block's own stiffness E / L
   support.stiffness = [](const Eigen::Vector3d&) { return 3e5; };
@@ -60,7 +33,7 @@ Eigen::MatrixXd sample_displacements(const core::TetMesh& m, const Eigen::Matrix
   TractionCondition pull;  // on the y = Ly face: about 1 % strain
   pull.traction = Eigen::Vector3d(0.0, 60.0, 0.0);
   bc.tractions.push_back(pull);
-  const FemRunResult r = solve_on_mesh(m, p, bc, {0.0}, samples, FemRunOptions{});
+  const FemRunResult r = solve_on_mesh(m, cracked_block::linear_parameters(), bc, {0.0}, samples, FemRunOptions{});
   *dofs = r.n_dofs;
   return r.sample_displacements;
 }
