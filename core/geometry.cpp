@@ -332,7 +332,7 @@ std::vector<double> clamp_edge_curves(const Case& c) {
 ///    size over one mesh size (when that size is below the mesh size).
 /// Returns the smallest of these sizes (model units), for the mesher's size floor (set_mesh_options).
 double refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh,
-                    const CrackEmbedding* crack) {
+                      const CrackEmbedding* crack) {
   const double r = c.load.radius / 1e-3;
   const double patch_size =
       fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
