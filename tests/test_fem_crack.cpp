@@ -7,7 +7,7 @@
 #include <iostream>
 #include <map>
 
-#include "cracked_block.hpp"
+#include "tests/cracked_block.hpp"
 
 namespace reference_fem {
 namespace {
