@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 
+#include "core/convergence_rate.hpp"
 #include "core/timoshenko_cantilever.hpp"
 #include "reference_fem/sample_evaluator.hpp"
 #include "reference_fem/viscoelastic_solver.hpp"
@@ -207,16 +208,12 @@ CantileverLevel run_cantilever(const CantileverOptions& o, int subdivisions) {
 }
 
 double convergence_rate(const std::vector<CantileverLevel>& levels) {
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  const double n = static_cast<double>(levels.size());
+  std::vector<double> h, error;
   for (const auto& l : levels) {
-    const double x = std::log(l.h), y = std::log(l.l2_error);
-    sx += x;
-    sy += y;
-    sxx += x * x;
-    sxy += x * y;
+    h.push_back(l.h);
+    error.push_back(l.l2_error);
   }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
+  return core::convergence_rate(h, error);
 }
 
 }  // namespace reference_fem

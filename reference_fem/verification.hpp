@@ -76,7 +76,7 @@ struct CantileverLevel {
 
 CantileverLevel run_cantilever(const CantileverOptions& options, int subdivisions);
 
-/// Least-squares slope of log(error) against log(h) over the levels.
+/// The L2 errors' order over the levels: core::convergence_rate of (h, l2_error).
 double convergence_rate(const std::vector<CantileverLevel>& levels);
 
 }  // namespace reference_fem

@@ -26,6 +26,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 #include "core/step_predictor.hpp"
 #include "core/voigt.hpp"
@@ -464,7 +465,7 @@ StepReport ViscoelasticSolver::do_time_step(double t_new) {
 }
 
 core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* report) {
-  const TrilinosWrappers::MPI::Vector committed = solution_;  // restored when an attempt fails
+  TrilinosWrappers::MPI::Vector committed = solution_;  // restored when an attempt fails; then the step's start
   const bool predicted = predict_start(t_new);
   core::NewtonAttempt attempt = newton_iterations(t_new, committed, report);
   if (!attempt.converged() && predicted) {
@@ -486,7 +487,7 @@ core::NewtonAttempt ViscoelasticSolver::newton_step(double t_new, StepReport* re
   report->admissibility_margin = std::min(report->admissibility_margin, iterate_margin_.margin);
   smallest_margin_.update(iterate_margin_.margin, t_new, iterate_margin_.point, iterate_margin_.strain);
   update_history(t_new - time_);
-  previous_step_ = PreviousStep{committed, time_, t_new};
+  previous_step_ = PreviousStep{std::move(committed), time_, t_new};  // the predictor's U_{n-1}, moved, not copied
   time_ = t_new;
   return attempt;
 }

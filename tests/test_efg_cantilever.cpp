@@ -7,6 +7,7 @@
 #include <iostream>
 #include <vector>
 
+#include "core/convergence_rate.hpp"
 #include "meshless/verification/verification_problems.hpp"
 
 namespace meshless {
@@ -28,8 +29,8 @@ Study cantilever_study(double d_max, int quadrature_order = 3) {
     s.l2.push_back(r.l2_error);
     s.energy.push_back(r.energy_error);
   }
-  s.rate_l2 = convergence_rate(s.h, s.l2);
-  s.rate_energy = convergence_rate(s.h, s.energy);
+  s.rate_l2 = core::convergence_rate(s.h, s.l2);
+  s.rate_energy = core::convergence_rate(s.h, s.energy);
   std::cout << "rates: L2 " << s.rate_l2 << ", energy " << s.rate_energy << "\n";
   return s;
 }

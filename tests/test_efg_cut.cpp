@@ -13,6 +13,7 @@
 #include <random>
 #include <set>
 
+#include "core/convergence_rate.hpp"
 #include "meshless/verification/box_mesh.hpp"
 #include "tests/cut_cloud.hpp"
 #include "meshless/cut/cut_quadrature.hpp"
@@ -177,7 +178,7 @@ TEST(EfgCut, ShapeFunctionsAreContinuousAtTheFrontWithRateOne) {
     jumps.push_back(oscillation_around_front(c, r));
     std::cout << "r = " << r * 1e3 << " mm: largest jump of phi_i around the front " << jumps.back() << "\n";
   }
-  const double rate = convergence_rate(radii, jumps);
+  const double rate = core::convergence_rate(radii, jumps);
   std::cout << "rate " << rate << "\n";
   EXPECT_NEAR(rate, 1.0, 0.1);
   EXPECT_LT(jumps.back(), 0.01);

@@ -13,8 +13,8 @@
 #include <cstdio>
 #include <vector>
 
+#include "core/convergence_rate.hpp"
 #include "core/case.hpp"
-#include "meshless/verification/verification_problems.hpp"
 #include "tests/cracked_block.hpp"
 
 namespace reference_fem {
@@ -59,7 +59,7 @@ TEST(FemCrackFront, GradingTheFrontRestoresTheSecondOrder) {
                   graded ? "graded  " : "ungraded", h * 1e3, dofs, error.back());
       std::fflush(stdout);
     }
-    order[graded] = meshless::convergence_rate(sizes, error);  // least-squares slope
+    order[graded] = core::convergence_rate(sizes, error);  // least-squares slope
     std::printf("%s: fitted order %.3f\n", graded ? "graded" : "ungraded", order[graded]);
   }
   // Measured 1.004 (errors 4.47, 2.76, 2.23 %) and 2.193 (2.12, 1.05, 0.46 %); the reference, 1.56M DOFs, takes

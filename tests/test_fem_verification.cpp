@@ -92,7 +92,8 @@ TEST(FemCantilever, L2ErrorConvergesAtRateThreeForDegreeTwo) {
   }
   const double rate = convergence_rate(levels);
   std::cout << "L2 rate " << rate << "\n";
-  EXPECT_GE(rate, 2.5);
+  // Measured 3.591 on these three levels (pre-asymptotic, above P2's 3); a lost order would give about 2.
+  EXPECT_NEAR(rate, 3.59, 0.1);
   EXPECT_LT(levels.back().l2_error, 1e-3);
   EXPECT_NEAR(levels.back().tip_deflection / levels.back().exact_tip_deflection, 1.0, 1e-3);
 }

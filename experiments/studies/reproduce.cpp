@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <fstream>
 #include <iostream>
 #include <nlohmann/json.hpp>
@@ -537,10 +538,16 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
   const core::JsonReader timing = root.object("timing");
   plan.timing.config = resolve_case(timing, "config", file);
   plan.timing.steps = timing.integer("steps", 1, 100, 1);
+  // The timing case is read only when a check below needs it, and then once.
+  std::optional<core::Case> timing_case;
+  const auto stressed_case = [&]() -> const core::Case& {
+    if (!timing_case) timing_case = core::load_case(plan.timing.config);
+    return *timing_case;
+  };
   if (timing.has("surrogate")) {
     plan.timing.surrogate_config = resolve_case(timing, "surrogate", file);
     const core::Case trained = core::load_case(plan.timing.surrogate_config);
-    const core::Case stressed = core::load_case(plan.timing.config);
+    const core::Case& stressed = stressed_case();
     double nearest = std::numeric_limits<double>::infinity();
     for (const Eigen::Vector3d& p : trained.surrogate.contact_points)
       nearest = std::min(nearest, (p - stressed.load.point).norm());
@@ -559,7 +566,7 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
     const json& models = timing.array("models", 1, "a non-empty array of registered model names");
     // The timing case's reference is always timed (it stands first in every row), so the list names the others;
     // refused here, at the plan's path, rather than later at the /compare path of a case the plan rewrote.
-    const std::string reference = core::load_case(plan.timing.config).compare.reference;
+    const std::string reference = stressed_case().compare.reference;
     for (std::size_t k = 0; k < models.size(); ++k) {
       const std::string at = fmt::format("models/{}", k);
       if (!models[k].is_string() || !make_model(models[k].get<std::string>()))

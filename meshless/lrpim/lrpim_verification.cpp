@@ -6,6 +6,7 @@
 #include <random>
 #include <string>
 
+#include "core/convergence_rate.hpp"
 #include "core/kelvin_law.hpp"
 #include "core/timoshenko_cantilever.hpp"
 #include "meshless/lrpim/local_quadrature.hpp"
@@ -326,7 +327,7 @@ nlohmann::json run_lrpim_verification(bool quick) {
                       {"tip_over_exact", r.tip_deflection / r.exact_tip_deflection},
                       {"seconds", r.seconds}});
   }
-  const double rate_l2 = convergence_rate(h, l2), rate_en = convergence_rate(h, en);
+  const double rate_l2 = core::convergence_rate(h, l2), rate_en = core::convergence_rate(h, en);
   item("cantilever",
        {{"levels", levels},
         {"rate_l2", rate_l2},

@@ -184,19 +184,6 @@ CantileverReport run_cantilever(int nd, int quadrature_order, bool variationally
   return r;
 }
 
-double convergence_rate(const std::vector<double>& h, const std::vector<double>& error) {
-  const int n = static_cast<int>(h.size());
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (int i = 0; i < n; ++i) {
-    const double x = std::log(h[i]), y = std::log(error[i]);
-    sx += x;
-    sy += y;
-    sxx += x * x;
-    sxy += x * y;
-  }
-  return (n * sxy - sx * sy) / (n * sxx - sx * sx);
-}
-
 CreepReport run_creep_bar(int steps, double support_stiffness) {
   const double L = 0.04, a = 0.01, sigma0 = 100.0, t_end = 4.0;
   auto tagger = [L](const Eigen::Vector3d& c, const Eigen::Vector3d&) {

@@ -58,9 +58,6 @@ constexpr double kCantileverMinRateL2 = 1.8, kCantileverMinRateEnergy = 1.3;
 /// d_max = 2, k = 6, quadrature order 2, one elastic step.
 EfgProblem sheared_box_problem(int points_per_side, double spacing = 0.005);
 
-/// Least-squares slope of log(error) against log(h).
-double convergence_rate(const std::vector<double>& h, const std::vector<double>& error);
-
 struct CreepReport {
   std::vector<double> times;     ///< [s]
   std::vector<double> strain;    ///< EFG: (u_x(L) - u_x(0)) / L

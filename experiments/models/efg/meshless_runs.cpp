@@ -6,6 +6,7 @@
 #include <optional>
 #include <iostream>
 
+#include "core/convergence_rate.hpp"
 #include "core/output_directory.hpp"
 #include "core/case.hpp"
 #include "core/inadmissible_strain.hpp"
@@ -319,7 +320,7 @@ int run_verify_meshless(const std::string& out_dir, bool quick) {
     md += fmt::format("| {:.3f} | {} | {:.3e} | {:.3e} | {:.5f} |\n", r.node_spacing * 1e3, r.num_nodes, r.l2_error,
                       r.energy_error, r.tip_deflection / r.exact_tip_deflection);
   }
-  const double rate_l2 = meshless::convergence_rate(h, l2), rate_en = meshless::convergence_rate(h, en);
+  const double rate_l2 = core::convergence_rate(h, l2), rate_en = core::convergence_rate(h, en);
   j["cantilever"] = {{"runs", cant}, {"rate_l2", rate_l2}, {"rate_energy", rate_en}};
   md += fmt::format("\nFitted rates: L2 {:.2f}, energy {:.2f} (required ≥ {} and ≥ {}).\n\n", rate_l2, rate_en,
                     meshless::kCantileverMinRateL2, meshless::kCantileverMinRateEnergy);
