@@ -339,6 +339,22 @@ TEST(CaseRunErrors, SupportTooSmallBesideTheCutSaysWhatToChange) {
   fs::remove_all(dir);
 }
 
+// The mesh studies run `verify fem --cantilever-levels 1` (one cantilever level beside the lung levels): one level
+// has no rate, and says so, instead of a NaN rate or a refusal.
+TEST(Cli, VerifyFemWithOneCantileverLevelHasNoRate) {
+  const fs::path out = fs::temp_directory_path() / ("tissue_verify_one_level_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const RunResult r = run("verify fem --skip-lung --cantilever-levels 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("One level: no L2 rate"), std::string::npos) << r.output;
+  const json cantilever = json::parse(std::ifstream(out / "fem.json"))["cantilever"];
+  EXPECT_TRUE(cantilever["l2_rate"].is_null());
+  ASSERT_EQ(cantilever["levels"].size(), 1u);
+  // P2 on one element through the depth (282 DOFs, direct solve): measured 3.8845e-3 against Timoshenko.
+  EXPECT_NEAR(cantilever["levels"][0]["relative_l2_error"].get<double>(), 3.8845e-3, 1e-6);
+  fs::remove_all(out);
+}
+
 TEST(Cli, HelpOnEverySubcommand) {
   for (const char* sub : {"", "case", "case check", "case mesh", "solve", "solve fem", "solve meshless", "cut", "verify",
                           "verify fem", "verify meshless", "compare", "sweep", "rsr", "reproduce"}) {
