@@ -85,7 +85,7 @@ TEST(MeshOrdering, IsAPermutationKeepingCellsFacesTagsAndOrientation) {
   // The same cells, all still positive; the same volume and tagged areas; every face keeps its tag.
   EXPECT_EQ(cells_by_coordinates(after), cells_by_coordinates(before));
   for (const auto& key : cells_by_coordinates(after)) EXPECT_EQ(key[12], 1.0);
-  EXPECT_NEAR(after.volume(), before.volume(), 1e-15);
+  EXPECT_NEAR(after.volume(), before.volume(), 1e-16);  // Measured 1.7e-19 (of 2.4e-5 m^3)
   for (core::FaceTag tag : {core::FaceTag::fixed, core::FaceTag::load, core::FaceTag::free_surface})
     EXPECT_NEAR(after.tagged_area(tag), before.tagged_area(tag), 1e-15);
   std::multiset<std::pair<std::array<int, 3>, int>> faces_before, faces_after;

@@ -283,8 +283,8 @@ TEST(MlsShapeFunctions, GradientsMatchFiniteDifferences) {
   const double e_perturbed = max_gradient_error(perturbed->mls, points);
   std::cout << "gradient vs central differences (relative): grid " << e_grid << ", perturbed " << e_perturbed
             << "\n";
-  EXPECT_LT(e_grid, 1e-6);
-  EXPECT_LT(e_perturbed, 1e-6);
+  EXPECT_LT(e_grid, 1.2e-8);       // Measured 6.06e-9 (the step's truncation error, deterministic)
+  EXPECT_LT(e_perturbed, 2.5e-8);  // Measured 1.22e-8
 }
 
 TEST(MlsShapeFunctions, WithoutGradientsGivesSameValues) {
@@ -420,7 +420,7 @@ TEST(MlsShapeFunctions, SmoothModifierGradientsMatchFiniteDifferences) {
   const auto points = random_points(30, 0.5 * kSpacing, kBox - 0.5 * kSpacing, 61);
   const double err = max_gradient_error(cloud->mls, points);
   std::cout << "gradient vs central differences with a smooth modifier (relative): " << err << "\n";
-  EXPECT_LT(err, 1e-6);
+  EXPECT_LT(err, 3e-8);  // Measured 1.43e-8 (the step's truncation error, deterministic)
   expect_consistent("perturbed cloud, smooth modifier", check_consistency(*cloud, points));
 }
 

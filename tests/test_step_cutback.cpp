@@ -126,7 +126,7 @@ TEST(StepCutback, InadmissibleIterateIsCutBackThenReportedAtTheMinimumStep) {
     EXPECT_EQ(calls, 2) << "only the whole step was tried: 0.1 is below the minimum";
     EXPECT_DOUBLE_EQ(e.margin(), outside->margin());
     EXPECT_EQ(e.point(), outside->point());
-    EXPECT_NEAR(e.margin(), -0.2, 1e-12);
+    EXPECT_NEAR(e.margin(), -0.2, 1e-14);  // Measured 5.6e-17
   }
   const auto converging = [&](double from, double to) {
     NewtonAttempt a;

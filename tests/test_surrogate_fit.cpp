@@ -119,8 +119,8 @@ TEST(SurrogateFitRounding, AComponentOfExactZerosFitsToZero) {
   }
   EXPECT_EQ(fit.axis[1].training_rms, 0.0);
   // The other components of axis x are untouched: the analytic field is in the span.
-  EXPECT_LT(fit.axis[0].field[0].cv_rms, 1e-12);
-  EXPECT_LT(fit.axis[0].training_rms, 1e-12);
+  EXPECT_LT(fit.axis[0].field[0].cv_rms, 1e-16);  // Measured 1.8e-19 m
+  EXPECT_LT(fit.axis[0].training_rms, 1e-16);     // Measured 4.4e-19 m
   for (const FitSummary& f : fit.summaries) {
     EXPECT_TRUE(f.usable) << f.what;
     EXPECT_TRUE(f.termination == "SOLVED" || f.termination == "BELOW_NOISE_FLOOR") << f.what;
@@ -280,8 +280,8 @@ TEST(SurrogateFitRounding, TrainingDataPerturbedAt1e12GiveTheSameOrdersAndCoeffi
   std::cout << "20 seeds at 1e-12, largest relative change: eqs. 25-27 coefficients " << worst[0]
             << ", eq. 28 coefficients " << worst[1] << " (per power " << worst[2]
             << "), the surface nodes' force polynomials " << worst[3] << "\n";
-  EXPECT_LE(worst[0], 1e-6);
-  EXPECT_LE(worst[1], 1e-6);
+  EXPECT_LE(worst[0], 1e-9);  // Measured 2.8e-12 (an iterative fit: a wide margin)
+  EXPECT_LE(worst[1], 1e-7);  // Measured 1.9e-10
   // Each power on its own scale: measured 1.3e-6, for the 4th power of the x force's x response, whose whole
   // contribution is 5e-5 of the first power's. A term that small, fitted from data perturbed at 1e-12 through
   // an 8-level force polynomial and a 100-term basis, moves by 1e-12 x 2e4 x ~50 of itself: the data's
