@@ -4,12 +4,12 @@
 
 #include <fmt/format.h>
 
-#include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
 
 #include "core/case.hpp"
+#include "core/convergence_rate.hpp"
 #include "core/geometry.hpp"
 #include "core/load_patch_zone.hpp"
 #include "core/output_directory.hpp"
@@ -99,7 +99,7 @@ nlohmann::json verify_cantilever(const VerifyFemOptions& opt, Progress* progress
     std::string rate = "";
     if (levels.size() > 1) {
       const auto& p = levels[levels.size() - 2];
-      rate = fmt::format("{:.2f}", std::log(p.l2_error / l.l2_error) / std::log(p.h / l.h));
+      rate = fmt::format("{:.2f}", core::convergence_rate({p.h, l.h}, {p.l2_error, l.l2_error}));  // this pair's order
     }
     *md += fmt::format("| {} | {:.2f} | {} | {:.3e} | {:.6f} | {} | {:.1f} |\n", n, l.h * 1e3, l.n_dofs, l.l2_error,
                        l.tip_deflection / l.exact_tip_deflection, rate, l.seconds);

@@ -53,20 +53,7 @@ RpimInvariantReport rpim_invariants(const RpimParameters& parameters, int points
     rpim.evaluate(x, true, &e);
     r.min_rcond = std::min(r.min_rcond, e.rcond);
     r.min_spread = std::min(r.min_spread, e.spread);
-    double sum = 0.0;
-    Eigen::Vector3d rep = Eigen::Vector3d::Zero(), gsum = Eigen::Vector3d::Zero();
-    Eigen::Matrix3d grep = Eigen::Matrix3d::Zero();
-    for (int k = 0; k < e.size(); ++k) {
-      const Eigen::Vector3d xi = nodes.row(e.nodes[k]).transpose();
-      sum += e.phi[k];
-      rep += e.phi[k] * xi;
-      gsum += e.dphi.col(k);
-      grep += xi * e.dphi.col(k).transpose();
-    }
-    r.max_partition_error = std::max(r.max_partition_error, std::abs(sum - 1.0));
-    r.max_reproduction_error = std::max(r.max_reproduction_error, (rep - x).norm() / a);
-    r.max_gradient_sum = std::max(r.max_gradient_sum, gsum.norm() * a);
-    r.max_gradient_reproduction = std::max(r.max_gradient_reproduction, (grep - Eigen::Matrix3d::Identity()).norm());
+    r.record(nodes, x, e.nodes, e.phi, e.dphi, a);
   }
   for (int j = 0; j < nodes.rows(); ++j) {
     rpim.evaluate(nodes.row(j).transpose(), false, &e);

@@ -9,15 +9,12 @@
 
 #include "meshless/lrpim/lrpim_problem.hpp"
 #include "meshless/lrpim/rpim_shape_functions.hpp"
+#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless::lrpim {
 
-struct RpimInvariantReport {
-  int num_nodes = 0, num_points = 0;
-  double max_partition_error = 0.0;        ///< max |sum phi_i - 1|
-  double max_reproduction_error = 0.0;     ///< max |sum phi_i X_i - X| / spacing
-  double max_gradient_sum = 0.0;           ///< max |sum grad phi_i| * spacing
-  double max_gradient_reproduction = 0.0;  ///< max |sum X_i (x) grad phi_i - I|
+/// The MLS's consistency errors (meshless::InvariantReport) and what only an interpolant has.
+struct RpimInvariantReport : InvariantReport {
   double max_kronecker_error = 0.0;        ///< max_ij |phi_i(X_j) - delta_ij| over nodes X_j
   double min_rcond = 1.0;                  ///< smallest rcond of G met
   double min_spread = 1.0;                 ///< smallest RpimEvaluation::spread met [d_c^2]
