@@ -48,6 +48,30 @@ TEST(GaussQuadratureTriangle, ExactForItsDegree) {
   }
 }
 
+// What `tissue verify meshless` reports as the MLS invariants (meshless.json, "invariants"), and that the check itself
+// sees a defect: the same evaluations with every phi_i scaled by 1 + 1e-6 and every gradient shifted by 1e-3 / m.
+TEST(EfgModel, MlsInvariantsOfVerifyMeshlessAreRoundOffAndSeeADefect) {
+  const InvariantReport r = mls_invariants();
+  std::cout << "MLS on " << r.num_nodes << " nodes, " << r.num_points << " points: partition " << r.max_partition_error
+            << ", reproduction " << r.max_reproduction_error << ", gradient sum " << r.max_gradient_sum
+            << ", gradient reproduction " << r.max_gradient_reproduction << "\n";
+  EXPECT_EQ(r.num_nodes, 1331);
+  EXPECT_LT(r.max_partition_error, 1e-14);        // 1.1e-15
+  EXPECT_LT(r.max_reproduction_error, 1e-13);     // 1.25e-14
+  EXPECT_LT(r.max_gradient_sum, 1e-14);           // 1.1e-15
+  EXPECT_LT(r.max_gradient_reproduction, 1e-13);  // 1.4e-14
+
+  // One node at the origin with phi = 1 + 1e-6 and a gradient of 1e-3 / m, evaluated at the origin, spacing 0.01 m.
+  InvariantReport defect;
+  const core::PointMatrix node = core::PointMatrix::Zero(1, 3);
+  Eigen::Matrix<double, 3, Eigen::Dynamic> dphi = Eigen::Matrix<double, 3, Eigen::Dynamic>::Constant(3, 1, 1e-3);
+  defect.record(node, Eigen::Vector3d::Zero(), {0}, Eigen::VectorXd::Constant(1, 1.0 + 1e-6), dphi, 0.01);
+  EXPECT_NEAR(defect.max_partition_error, 1e-6, 1e-15);
+  EXPECT_NEAR(defect.max_reproduction_error, 0.0, 1e-15);             // the node sits at x: phi_i X_i = x exactly
+  EXPECT_NEAR(defect.max_gradient_sum, std::sqrt(3.0) * 1e-5, 1e-15);  // |(1e-3, 1e-3, 1e-3)| * 0.01
+  EXPECT_NEAR(defect.max_gradient_reproduction, std::sqrt(3.0), 1e-15);  // X_i = 0: |0 - I| = sqrt(3)
+}
+
 TEST(EfgModel, PatchTestIsPassedToRoundOff) {
   for (int order : {2, 3}) {
     const PatchTestReport r = run_patch_test(order, true);
