@@ -13,7 +13,8 @@
 
 namespace meshless::lrpim {
 
-/// The MLS's consistency errors (meshless::InvariantReport) and what only an interpolant has.
+/// The consistency errors every linearly complete family has (meshless::InvariantReport) and what only an
+/// interpolant has.
 struct RpimInvariantReport : InvariantReport {
   double max_kronecker_error = 0.0;        ///< max_ij |phi_i(X_j) - delta_ij| over nodes X_j
   double min_rcond = 1.0;                  ///< smallest rcond of G met
