@@ -203,11 +203,12 @@ TEST(Lrpim, RpimShapeFunctionsReproduceLinearFieldsAndInterpolate) {
             << ", gradient reproduction " << r.max_gradient_reproduction << ", Kronecker delta "
             << r.max_kronecker_error << ", smallest rcond " << r.min_rcond << ", smallest spread " << r.min_spread
             << " d_c^2\n";
-  EXPECT_LT(r.max_partition_error, 1e-13);        // 1.2e-15
-  EXPECT_LT(r.max_reproduction_error, 1e-12);     // 1.2e-14
-  EXPECT_LT(r.max_gradient_sum, 1e-13);           // 2.3e-15
-  EXPECT_LT(r.max_gradient_reproduction, 1e-12);  // 3.5e-14
-  EXPECT_LT(r.max_kronecker_error, 1e-11);        // 2.8e-13
+  // At about ten times what is measured (`tissue verify lrpim` keeps its looser pass bounds, lrpim.md).
+  EXPECT_LT(r.max_partition_error, 1e-14);        // 1.22e-15
+  EXPECT_LT(r.max_reproduction_error, 1e-13);     // 1.19e-14
+  EXPECT_LT(r.max_gradient_sum, 2e-14);           // 1.78e-15
+  EXPECT_LT(r.max_gradient_reproduction, 2e-13);  // 1.88e-14
+  EXPECT_LT(r.max_kronecker_error, 3e-12);        // 2.77e-13
   EXPECT_GT(r.min_rcond, 1e-10);                  // 4.3e-9: the flat MQ, far above min_rcond
   // A healthy support is far from the rank test (1e-6): the jittered cloud's smallest spread is 0.1898 d_c^2, held to
   // its measured value so that a change in how the spread is computed shows.
