@@ -49,7 +49,7 @@ TEST(GaussQuadratureTriangle, ExactForItsDegree) {
 }
 
 // What `tissue verify meshless` reports as the MLS invariants (meshless.json, "invariants"), and that the check itself
-// sees a defect: the same evaluations with every phi_i scaled by 1 + 1e-6 and every gradient shifted by 1e-3 / m.
+// sees a defect: one node at the evaluation point with phi = 1 + 1e-6 and a gradient of 1e-3 / m on each axis.
 TEST(EfgModel, MlsInvariantsOfVerifyMeshlessAreRoundOffAndSeeADefect) {
   const InvariantReport r = mls_invariants();
   std::cout << "MLS on " << r.num_nodes << " nodes, " << r.num_points << " points: partition " << r.max_partition_error
