@@ -315,6 +315,34 @@ TEST(CompareSummary, EachModelsCutEffectAgainstTheFems) {
   EXPECT_FALSE(experiments::comparison_summary(synthetic_comparison(false)).contains("cut_effect"));
 }
 
+// With the solved reference and a study that extrapolated it, every model is also scored against the extrapolated
+// samples, with their own bar; with the extrapolated reference (or without a study) there is no such section.
+TEST(CompareSummary, EachModelAgainstTheExtrapolatedSamplesBesideTheirBar) {
+  experiments::Comparison c = synthetic_comparison(false);
+  EXPECT_FALSE(experiments::comparison_summary(c).contains("versus_extrapolated"));  // no study
+  Eigen::MatrixXd x = c.reference.sample_displacements;
+  x(0, 0) = 0.005;  // the converged FEM: 5 mm at sample 0, 1 mm more than this reference
+  c.error_bar.known = true;
+  c.error_bar.rms_mm = 0.7;
+  c.error_bar.extrapolated_samples = x;
+  c.error_bar.extrapolated_relative = 0.01;
+  const json v = experiments::comparison_summary(c)["versus_extrapolated"];
+  const double norm_mm = std::sqrt(25.0 + 4.0 + 1.0);
+  EXPECT_NEAR(v["peak_sample_displacement_mm"].get<double>(), 5.0, 1e-12);
+  EXPECT_NEAR(v["error_bar_mm"].get<double>(), 0.01 * norm_mm / std::sqrt(3.0), 1e-12);
+  EXPECT_NEAR(v["solved_reference_rmse_mm"].get<double>(), std::sqrt(1.0 / 3.0), 1e-12);
+  // enrichment errors against x: (-1, 0, 0.3), (0, 0.4, 0), 0 mm; visibility = half the reference: 3, 1, 0.5 mm.
+  EXPECT_NEAR(v["models"]["enrichment"]["rmse_mm"].get<double>(), std::sqrt((1.09 + 0.16) / 3.0), 1e-12);
+  EXPECT_NEAR(v["models"]["visibility"]["rmse_mm"].get<double>(), std::sqrt((9.0 + 1.0 + 0.25) / 3.0), 1e-12);
+  EXPECT_NEAR(v["models"]["visibility"]["rmse_relative_to_peak"].get<double>(), std::sqrt(10.25 / 3.0) / 5.0, 1e-12);
+  const std::string md = experiments::comparison_table_md(c, experiments::comparison_summary(c));
+  EXPECT_NE(md.find("**Against the converged FEM**"), std::string::npos);
+  // The extrapolated reference already is what this section would add.
+  c.solved_reference_samples = c.reference.sample_displacements;
+  c.reference.sample_displacements = x;
+  EXPECT_FALSE(experiments::comparison_summary(c).contains("versus_extrapolated"));
+}
+
 TEST(CompareSummary, RmseWithAndWithoutFlaggedSamplesAndPhaseTimes) {
   const experiments::Comparison c = synthetic_comparison(false);
   const json s = experiments::comparison_summary(c);

@@ -104,6 +104,7 @@ TEST(ReproducePlan, Table1RowKeepsAModelThatCannotSolveTheCase) {
   EXPECT_EQ(row["models"][2]["name"], "visibility");
   EXPECT_EQ(row["models"][2]["not_solved"], "failed: Newton");
   EXPECT_EQ(experiments::table1_verdict(row), "no proposed model and baseline to compare");
+  EXPECT_TRUE(row["versus_extrapolated"].is_null());  // no mesh study: Table 1's cell is "–"
 }
 
 TEST(ReproducePlan, ASurrogateCaseTrainedElsewhereIsRefused) {

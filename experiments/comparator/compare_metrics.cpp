@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 namespace experiments {
 
@@ -55,6 +56,12 @@ double rmse(const Eigen::MatrixXd& u, const Eigen::MatrixXd& u_reference, const 
 }
 
 double peak_magnitude(const Eigen::MatrixXd& u) { return u.rows() == 0 ? 0.0 : u.rowwise().norm().maxCoeff(); }
+
+double ReferenceErrorBar::extrapolated_rms_mm() const {
+  if (!extrapolated_samples) throw std::logic_error("ReferenceErrorBar::extrapolated_rms_mm: no extrapolated samples");
+  const Eigen::MatrixXd& x = *extrapolated_samples;
+  return extrapolated_relative * x.norm() * 1e3 / std::sqrt(static_cast<double>(x.rows()));
+}
 
 nlohmann::json ReferenceErrorBar::to_json() const {
   if (!known) return {{"known", false}, {"why_unknown", why_unknown}, {"source", source}};

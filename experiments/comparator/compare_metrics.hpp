@@ -57,6 +57,9 @@ struct ReferenceErrorBar {
   std::optional<Eigen::MatrixXd> extrapolated_samples;
   double extrapolated_relative = 0.0;
   std::string extrapolated_method;
+  /// The extrapolated samples' bar as an RMS over the samples [mm]: extrapolated_relative × ‖U*‖ / √n.
+  /// Requires extrapolated_samples.
+  double extrapolated_rms_mm() const;
   nlohmann::json to_json() const;
 };
 
