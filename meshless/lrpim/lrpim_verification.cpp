@@ -14,7 +14,6 @@
 #include "meshless/mls/node_search.hpp"
 #include "meshless/verification/box_mesh.hpp"
 #include "meshless/verification/linear_patch_field.hpp"
-#include "meshless/verification/verification_problems.hpp"
 
 namespace meshless::lrpim {
 

@@ -9,7 +9,7 @@
 
 #include "meshless/lrpim/lrpim_problem.hpp"
 #include "meshless/lrpim/rpim_shape_functions.hpp"
-#include "meshless/verification/verification_problems.hpp"
+#include "meshless/verification/invariant_report.hpp"
 
 namespace meshless::lrpim {
 

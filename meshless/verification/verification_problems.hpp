@@ -8,23 +8,10 @@
 #include <vector>
 
 #include "meshless/efg/efg_problem.hpp"
+#include "meshless/verification/invariant_report.hpp"
 
 namespace meshless {
 
-/// The worst consistency errors of a linearly complete shape function family (MLS, RPIM) over the points recorded.
-struct InvariantReport {
-  int num_nodes = 0, num_points = 0;
-  double max_partition_error = 0.0;     ///< max |sum phi_i - 1|
-  double max_reproduction_error = 0.0;  ///< max |sum phi_i X_i - X| / node spacing
-  double max_gradient_sum = 0.0;        ///< max |sum grad phi_i| * node spacing
-  double max_gradient_reproduction = 0.0;  ///< max |sum X_i (x) grad phi_i - I|
-
-  /// Keeps the errors at `x` of the shape functions `phi` (and gradients `dphi`, 3 by #n, 1/m) of the nodes
-  /// `node_ids` (rows of `nodes`, m) where they exceed those recorded. `spacing` [m] makes the reproduction and
-  /// gradient-sum errors dimensionless.
-  void record(const core::PointMatrix& nodes, const Eigen::Vector3d& x, const std::vector<int>& node_ids,
-              const Eigen::VectorXd& phi, const Eigen::Matrix<double, 3, Eigen::Dynamic>& dphi, double spacing);
-};
 /// MLS on a jittered 11^3 box cloud (spacing 10 mm, support d_max = 2, k = 6), at `points` random points.
 InvariantReport mls_invariants(int points = 2000, unsigned seed = 7);
 
