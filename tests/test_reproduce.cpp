@@ -261,4 +261,17 @@ TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
   EXPECT_NE(experiments::table1_verdict(row).find("3.0× the reference's bar and the cloud change combined: significant"),
             std::string::npos)
       << experiments::table1_verdict(row);
+  // Against the extrapolated FEM (lung_large's figures of 29 Nov 2026): 0.1210 - 0.1265 = -0.0055 mm against
+  // hypot(0.0122, 0.01) = 0.0158 mm: 0.3×.
+  row["versus_extrapolated"] = {{"error_bar_mm", 0.0122},
+                                {"models", {{"enrichment", {{"rmse_mm", 0.1210}}}, {"visibility", {{"rmse_mm", 0.1265}}}}}};
+  EXPECT_NE(experiments::table1_verdict(row).find("; against the extrapolated FEM enrichment closer by 0.0055 mm, 0.3× "
+                                                  "their bar and the cloud change combined: not significant"),
+            std::string::npos)
+      << experiments::table1_verdict(row);
+  row["versus_extrapolated"]["models"]["visibility"]["rmse_mm"] = 0.0810;  // the baseline closer: 0.04 / 0.0158 = 2.5
+  EXPECT_NE(experiments::table1_verdict(row).find("against the extrapolated FEM visibility closer by 0.0400 mm, 2.5× "
+                                                  "their bar and the cloud change combined: significant"),
+            std::string::npos)
+      << experiments::table1_verdict(row);
 }
