@@ -105,6 +105,16 @@ TEST(ReproducePlan, Table1RowKeepsAModelThatCannotSolveTheCase) {
   EXPECT_EQ(row["models"][2]["not_solved"], "failed: Newton");
   EXPECT_EQ(experiments::table1_verdict(row), "no proposed model and baseline to compare");
   EXPECT_TRUE(row["versus_extrapolated"].is_null());  // no mesh study: Table 1's cell is "–"
+
+  // With a study that extrapolated the reference, the row keeps every model's RMSE against it, their bar and the
+  // solved reference's own distance from them (which the summary keeps under "reference").
+  nlohmann::json studied = summary;
+  studied["reference"]["solved_minus_extrapolated_rms_mm"] = 0.0700;
+  studied["versus_extrapolated"] = {{"error_bar_mm", 0.0122}, {"models", {{"enrichment", {{"rmse_mm", 0.1210}}}}}};
+  const nlohmann::json converged = experiments::table1_row(t, studied).at("versus_extrapolated");
+  EXPECT_DOUBLE_EQ(converged.at("solved_reference_rmse_mm").get<double>(), 0.0700);
+  EXPECT_DOUBLE_EQ(converged.at("error_bar_mm").get<double>(), 0.0122);
+  EXPECT_DOUBLE_EQ(converged.at("models").at("enrichment").at("rmse_mm").get<double>(), 0.1210);
 }
 
 TEST(ReproducePlan, ASurrogateCaseTrainedElsewhereIsRefused) {

@@ -34,8 +34,8 @@ using nlohmann::json;
 
 namespace {
 
-/// The runs.csv column of the reference's own RMSE against the extrapolated samples (empty when the reference is
-/// the solved FEM).
+/// The runs.csv column of the reference's own RMSE against the extrapolated samples (empty without a mesh study that
+/// extrapolated this reference).
 const char* const kFemVsExtrapolated = "fem_rmse_vs_extrapolated_mm";
 
 /// That column's value from a compare summary.json.
