@@ -251,6 +251,30 @@ TEST(CloudChange, TakesTheDifferenceWhereBothSolvedElseOneModelsRmse) {
   EXPECT_NE(none.why_unknown.find("tissue sweep"), std::string::npos) << none.why_unknown;
 }
 
+// Against the extrapolated samples, the clouds' RMSEs are read from their summaries' versus_extrapolated; a run
+// written before compare wrote them is unused, and says why.
+TEST(CloudChange, AgainstTheExtrapolatedFemReadsTheRunsRmsesAgainstIt) {
+  const auto root = std::filesystem::temp_directory_path() / "tissue_cloud_change_extrapolated";
+  std::filesystem::remove_all(root);
+  experiments::CloudChangeBaseline row{"enrichment", "visibility", 0.1210, 0.1265, 9.8187};
+  row.versus_extrapolated = true;
+  write_run(root / "a", "old", 9.8187, 0.0670, 0.1652);  // no versus_extrapolated
+  write_run(root / "a", "new", 9.8187, 0.0670, 0.1652);
+  const auto summary = root / "a" / "runs" / "new" / "summary.json";
+  nlohmann::json s = nlohmann::json::parse(std::ifstream(summary));
+  s["versus_extrapolated"]["models"] = {{"enrichment", {{"rmse_mm", 0.0900}}}, {"visibility", {{"rmse_mm", 0.1100}}}};
+  std::ofstream(summary) << s.dump();
+  const experiments::CloudChange c = experiments::cloud_change({(root / "a").string()}, row);
+  ASSERT_TRUE(c.known) << c.why_unknown;
+  // The difference moves from -0.0055 to -0.0200 mm (not from the solved reference's RMSEs, -0.0982).
+  EXPECT_NEAR(c.mm, 0.0145, 1e-12);
+  EXPECT_EQ(c.measure, "difference");
+  ASSERT_EQ(c.runs.size(), 2u);
+  EXPECT_EQ(c.runs[0]["enrichment"]["rmse_mm"], 0.0900);  // "new" sorts before "old"
+  EXPECT_NE(c.runs[1]["unused"].get<std::string>().find("no RMSEs against the extrapolated FEM"), std::string::npos)
+      << c.runs.dump();
+}
+
 // The verdict sets the difference against sqrt(bar^2 + cloud change^2): 0.0418 / hypot(0.071, 0.0991) = 0.34.
 TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
   nlohmann::json row = {
@@ -275,13 +299,22 @@ TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
   // hypot(0.0122, 0.01) = 0.0158 mm: 0.3×.
   row["versus_extrapolated"] = {{"error_bar_mm", 0.0122},
                                 {"models", {{"enrichment", {{"rmse_mm", 0.1210}}}, {"visibility", {{"rmse_mm", 0.1265}}}}}};
+  // Without the clouds' RMSEs against the extrapolated samples, the change against the solved reference stands in.
   EXPECT_NE(experiments::table1_verdict(row).find("; against the extrapolated FEM enrichment closer by 0.0055 mm, 0.3× "
-                                                  "their bar and the cloud change combined: not significant"),
+                                                  "their bar and the cloud change against the solved reference "
+                                                  "combined: not significant"),
             std::string::npos)
       << experiments::table1_verdict(row);
   row["versus_extrapolated"]["models"]["visibility"]["rmse_mm"] = 0.0810;  // the baseline closer: 0.04 / 0.0158 = 2.5
   EXPECT_NE(experiments::table1_verdict(row).find("against the extrapolated FEM visibility closer by 0.0400 mm, 2.5× "
-                                                  "their bar and the cloud change combined: significant"),
+                                                  "their bar and the cloud change against the solved reference "
+                                                  "combined: significant"),
+            std::string::npos)
+      << experiments::table1_verdict(row);
+  // With them: 0.04 / hypot(0.0122, 0.03) = 1.2.
+  row["cloud_change_versus_extrapolated"] = {{"known", true}, {"mm", 0.03}, {"measure", "difference"}};
+  EXPECT_NE(experiments::table1_verdict(row).find("against the extrapolated FEM visibility closer by 0.0400 mm, 1.2× "
+                                                  "their bar and the cloud change against them combined: marginal"),
             std::string::npos)
       << experiments::table1_verdict(row);
 }

@@ -24,9 +24,12 @@ json CloudChange::to_json() const {
 
 namespace {
 
-/// A model's RMSE [mm] in a comparison summary, or a negative value when it did not solve there.
-double rmse_of(const json& summary, const std::string& name) {
-  const json& models = summary.value("models", json::object());
+/// A model's RMSE [mm] in a comparison summary (against the extrapolated samples when `versus_extrapolated`), or a
+/// negative value when it did not solve there.
+double rmse_of(const json& summary, const std::string& name, bool versus_extrapolated) {
+  const json models = versus_extrapolated
+                          ? summary.value("versus_extrapolated", json::object()).value("models", json::object())
+                          : summary.value("models", json::object());
   if (!models.contains(name) || !models.at(name).value("rmse_mm", json()).is_number()) return -1.0;
   return models.at(name).at("rmse_mm").get<double>();
 }
@@ -71,7 +74,14 @@ CloudChange cloud_change(const std::vector<std::string>& study_dirs, const Cloud
         result.runs.push_back(run);
         continue;
       }
-      const double p = rmse_of(s, row.proposed), b = rmse_of(s, row.baseline);
+      if (row.versus_extrapolated && !s.contains("versus_extrapolated")) {
+        run["unused"] = "no RMSEs against the extrapolated FEM (a run from before compare wrote them, or without the "
+                        "mesh study; rerun its sweep)";
+        result.runs.push_back(run);
+        continue;
+      }
+      const double p = rmse_of(s, row.proposed, row.versus_extrapolated),
+                   b = rmse_of(s, row.baseline, row.versus_extrapolated);
       for (const std::string& name : {row.proposed, row.baseline}) {
         const double rmse = name == row.proposed ? p : b;
         const json& details =

@@ -6,7 +6,9 @@
 // The input is the kept results of sweeps over the node cloud of a Table 1 case (for the cut case,
 // configs/sweeps/cut_variants_*.json): each run folder's summary.json under <study>/runs/. A run counts only
 // if it solved against the same reference as the Table 1 row (the same peak sample displacement, to 1e-9
-// relative), so a study of another case or reference is never mixed in.
+// relative), so a study of another case or reference is never mixed in. The RMSEs are those against the solved
+// reference, or those against the mesh study's extrapolated samples that compare writes beside them
+// (summary.json `versus_extrapolated`), as the row's are.
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -20,7 +22,10 @@ struct CloudChangeBaseline {
   double proposed_rmse_mm = 0.0;
   double baseline_rmse_mm = 0.0;
   double reference_peak_mm =
-      0.0;  ///< the reference's peak sample displacement, which identifies the reference
+      0.0;  ///< the solved reference's peak sample displacement, which identifies the reference
+  /// false: the RMSEs against the solved reference (summary.json `models`); true: against the extrapolated samples
+  /// (`versus_extrapolated.models`), which a run written before compare wrote them lacks (it is then unused).
+  bool versus_extrapolated = false;
 };
 
 struct CloudChange {
