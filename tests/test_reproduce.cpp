@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 
 #include <algorithm>
@@ -317,4 +318,65 @@ TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
                                                   "their bar and the cloud change against them combined: marginal"),
             std::string::npos)
       << experiments::table1_verdict(row);
+}
+
+// table1.md from rows as `reproduce` writes them: the cut row with its RMSEs against the extrapolated FEM, both cloud
+// changes and their footnotes; the small row without a study ("–") and with a model that was not solved.
+TEST(ReproducePlan, Table1MarkdownShowsTheConvergedFemColumnAndBothCloudChanges) {
+  const nlohmann::json enrichment = {{"name", "enrichment"}, {"role", "proposed: the EFG"}, {"rmse_mm", 0.1021},
+                                     {"relative", 0.0103}, {"unflagged_mm", 0.0948}};
+  const nlohmann::json visibility = {{"name", "visibility"}, {"role", "baseline: visibility"}, {"rmse_mm", 0.1439},
+                                     {"relative", 0.0145}, {"unflagged_mm", 0.0806}};
+  nlohmann::json cut = {
+      {"label", "cutting"},
+      {"models", {enrichment, visibility}},
+      {"difference_mm", -0.0418},
+      {"cut_effect", nullptr},
+      {"reference_error_bar", {{"known", true}, {"rms_mm", 0.071}, {"method", "against the finest level"}}},
+      {"versus_extrapolated",
+       {{"error_bar_mm", 0.0122},
+        {"solved_reference_rmse_mm", 0.0700},
+        {"models",
+         {{"enrichment", {{"rmse_mm", 0.1210}, {"rmse_relative_to_peak", 0.0123}}},
+          {"visibility", {{"rmse_mm", 0.1265}, {"rmse_relative_to_peak", 0.0129}}}}}}},
+      {"cloud_change",
+       {{"known", true}, {"mm", 0.1068}, {"measure", "difference"},
+        {"runs", {{{"run", "runs/a"}, {"enrichment", {{"rmse_mm", 0.0670}, {"n_nodes", 12217}}}}}}}},
+      {"cloud_change_versus_extrapolated",
+       {{"known", true}, {"mm", 0.0562}, {"measure", "difference"},
+        {"runs", {{{"run", "runs/a"}, {"enrichment", {{"rmse_mm", 0.0711}, {"n_nodes", 12217}}}},
+                  {{"run", "runs/old"}, {"unused", "no RMSEs against the extrapolated FEM"}}}}}},
+      {"paper_enrichment_mm", 4.04},
+      {"paper_visibility_mm", 8.03},
+      {"paper_difference_mm", -3.99}};
+  nlohmann::json small = cut;
+  small["label"] = "small";
+  small["models"] = {enrichment, {{"name", "lrpim"}, {"role", "Fig. 9 baseline: LRPIM"}, {"not_solved", "no cut"}}};
+  small["difference_mm"] = nullptr;
+  small["versus_extrapolated"] = nullptr;
+  small.erase("cloud_change");
+  small.erase("cloud_change_versus_extrapolated");
+  const std::string md = experiments::table1_md(nlohmann::json::array({small, cut}));
+  const auto has = [&](const std::string& text) { return md.find(text) != std::string::npos; };
+  EXPECT_TRUE(has("| against the extrapolated FEM [mm] |")) << md;
+  EXPECT_TRUE(has("enrichment 0.1210 (1.2 %), visibility 0.1265 (1.3 %); their bar 0.0122 mm; the solved reference "
+                  "0.0700 mm from them"))
+      << md;
+  EXPECT_TRUE(has("| 0.1068 (difference); against the extrapolated FEM 0.0562 (difference) |")) << md;
+  EXPECT_TRUE(has("0.1× their bar and the cloud change against them combined: not significant")) << md;
+  EXPECT_TRUE(has("cutting: the meshless cloud change against the extrapolated FEM, from the kept runs of its cloud "
+                  "studies:\n- runs/a: enrichment 0.0711 mm (12217 nodes)\n- runs/old: unused, no RMSEs against "
+                  "the extrapolated FEM"))
+      << md;
+  EXPECT_TRUE(has("| small | 0.1021 (1.0 %) | not solved |")) << md;
+  EXPECT_TRUE(has("small, lrpim: no cut.")) << md;
+  // Every row has as many cells as the header.
+  std::size_t header_cells = 0, row_cells = 0;
+  std::istringstream lines(md);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("| case |", 0) == 0) header_cells = std::count(line.begin(), line.end(), '|');
+    if (line.rfind("| cutting |", 0) == 0) row_cells = std::count(line.begin(), line.end(), '|');
+  }
+  EXPECT_GT(header_cells, 10u);
+  EXPECT_EQ(row_cells, header_cells) << md;
 }

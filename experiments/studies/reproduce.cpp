@@ -207,109 +207,6 @@ std::string versus_extrapolated_cell(const json& v) {
                             v.at("error_bar_mm").get<double>(), v.at("solved_reference_rmse_mm").get<double>());
 }
 
-std::string table1_md(const json& rows) {
-  const auto columns = table1_columns(rows);
-  std::string md = "# Table 1: RMSE of the sample displacements against the FEM reference (eq. 34)\n\n| case |";
-  std::string rule = "|---|";
-  for (const auto& [name, kind] : columns) {
-    md += fmt::format(" {} ({}) [mm] |", name, kind);
-    rule += "---|";
-  }
-  md += " difference [mm] | without flagged samples [mm] | cut effect RMSE [mm] | reference error bar | against the "
-        "extrapolated FEM [mm] | meshless cloud change [mm] | verdict | paper: proposed / baseline / difference [mm] "
-        "|\n" + rule + "---|---|---|---|---|---|---|---|\n";
-  for (const json& r : rows) {
-    const auto find = [&](const std::string& name) -> const json* {
-      for (const json& m : r.at("models"))
-        if (m.at("name") == name) return &m;
-      return nullptr;
-    };
-    md += "| " + r.at("label").get<std::string>() + " |";
-    std::string unflagged, effect;
-    for (const auto& [name, kind] : columns) {
-      const json* m = find(name);
-      if (!m) {
-        md += " – |";
-        continue;
-      }
-      if (m->contains("not_solved")) {  // a model that cannot solve the case, or whose solve failed (its error below)
-        md += m->at("not_solved").get<std::string>().rfind("failed", 0) == 0 ? " failed |" : " not solved |";
-        continue;
-      }
-      md += fmt::format(" {:.4f} ({:.1f} %) |", m->at("rmse_mm").get<double>(), 100 * m->at("relative").get<double>());
-      unflagged += fmt::format("{}{} {}", unflagged.empty() ? "" : ", ", name,
-                               number_or_dash(m->at("unflagged_mm"), "{:.4f}"));
-      const json& e = r.at("cut_effect");
-      if (!e.is_null() && e.at("models").contains(name)) {
-        const json& em = e.at("models").at(name);
-        effect += fmt::format("{}{} {:.4f} ({:.1f} %)", effect.empty() ? "" : ", ", name, em.at("rmse_mm").get<double>(),
-                              100 * em.value("rmse_relative_to_fem_peak", 0.0));
-      }
-    }
-    const json& bar = r.at("reference_error_bar");
-    const std::string error_bar = bar.value("known", false)
-                                      ? fmt::format("{:.3f} mm ({})", bar.at("rms_mm").get<double>(),
-                                                    bar.value("method", std::string()))
-                                      : "unknown: " + bar.value("why_unknown", std::string());
-    const json cloud = r.value("cloud_change", json::object());
-    const std::string converged = versus_extrapolated_cell(r.value("versus_extrapolated", json()));
-    const auto change_text = [](const json& change) {
-      return fmt::format("{:.4f} ({})", change.at("mm").get<double>(), change.at("measure").get<std::string>());
-    };
-    const json cloud_x = r.value("cloud_change_versus_extrapolated", json::object());
-    std::string cloud_change = cloud.value("known", false) ? change_text(cloud) : "–";
-    if (cloud_x.value("known", false)) cloud_change += "; against the extrapolated FEM " + change_text(cloud_x);
-    md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
-                      number_or_dash(r.at("difference_mm"), "{:+.4f}"), unflagged.empty() ? "–" : unflagged,
-                      effect.empty() ? "–" : effect, error_bar, converged, cloud_change, table1_verdict(r),
-                      r.at("paper_enrichment_mm").get<double>(), r.at("paper_visibility_mm").get<double>(),
-                      r.at("paper_difference_mm").get<double>());
-  }
-  for (const json& r : rows)
-    for (const auto& [key, title] : {std::pair<std::string, std::string>{"cloud_change", "the meshless cloud change"},
-                                     {"cloud_change_versus_extrapolated",
-                                      "the meshless cloud change against the extrapolated FEM"}}) {
-    const json cloud = r.value(key, json::object());
-    if (cloud.value("known", false)) {
-      std::string runs;
-      for (const json& run : cloud.at("runs")) {
-        std::string models;
-        for (const auto& [name, v] : run.items())
-          if (v.is_object())
-            models += fmt::format("{}{} {}", models.empty() ? "" : ", ", name,
-                                  v.contains("rmse_mm") ? fmt::format("{:.4f} mm ({} nodes)", v.at("rmse_mm").get<double>(),
-                                                                      v.at("n_nodes").dump())
-                                                        : std::string("not solved"));
-        runs += fmt::format("\n- {}: {}", run.at("run").get<std::string>(),
-                            run.contains("unused") ? "unused, " + run.at("unused").get<std::string>() : models);
-      }
-      md += fmt::format("\n{}: {}, from the kept runs of its cloud studies:{}\n", r.at("label").get<std::string>(),
-                        title, runs);
-    }
-  }
-  for (const json& r : rows)
-    for (const json& m : r.at("models"))
-      if (m.contains("not_solved"))
-        md += fmt::format("\n{}, {}: {}.\n", r.at("label").get<std::string>(), m.at("name").get<std::string>(),
-                          m.at("not_solved").get<std::string>());
-  md += "\nThe paper's Table 1 is for its own lung models (§5.4); ours are the lung cases named in the plan, on another "
-        "lung, support and load, so compare the ranking and the relative size of the models, not the millimetres. "
-        "One column per model of each case's /compare list, with its role: proposed (the paper's model), baseline "
-        "(the paper's interactive meshless cutting model), other meshless models, and the floor (the undeformed body: "
-        "its RMSE is the reference's own RMS displacement, which any model must beat). The difference is the "
-        "proposed model's RMSE minus the baseline's. The cut effect is each model's cut solve minus its own uncut "
-        "solve, compared with the FEM's, so that the meshless model's common discretisation error does not decide "
-        "which cut treatment wins. The meshless cloud change is how far the difference moves when only the node cloud "
-        "changes (the plan's cloud_studies; where the proposed model solves on no other cloud, the largest change of "
-        "one model's RMSE stands in for it). Against the extrapolated FEM: each model's RMSE against the samples "
-        "that the committed mesh study (results/verify/fem.json) extrapolated from its two finest levels, whose bar "
-        "(their estimated error) is far smaller than that of the solved reference: how far each model is from the "
-        "converged FEM. The verdict's significance sets the difference of the RMSEs against the "
-        "reference's error bar (RMS) and the cloud change combined, sqrt(bar² + change²): above 2× significant, 1–2× "
-        "marginal; then the same against the extrapolated FEM, with their bar. Each case's full comparison (per-sample "
-        "errors, flags, timings, radar diagram) is in its sub-folder.\n";
-  return md;
-}
 
 /// The timing case with the plan's models (ReproducePlan::Timing::models; empty: the case's own list).
 core::Case with_timed_models(const core::Case& base, const std::vector<std::string>& models) {
@@ -465,6 +362,110 @@ void plot_timing(const core::OutputDirectory& out, json* timing) {
 }
 
 }  // namespace
+
+std::string table1_md(const json& rows) {
+  const auto columns = table1_columns(rows);
+  std::string md = "# Table 1: RMSE of the sample displacements against the FEM reference (eq. 34)\n\n| case |";
+  std::string rule = "|---|";
+  for (const auto& [name, kind] : columns) {
+    md += fmt::format(" {} ({}) [mm] |", name, kind);
+    rule += "---|";
+  }
+  md += " difference [mm] | without flagged samples [mm] | cut effect RMSE [mm] | reference error bar | against the "
+        "extrapolated FEM [mm] | meshless cloud change [mm] | verdict | paper: proposed / baseline / difference [mm] "
+        "|\n" + rule + "---|---|---|---|---|---|---|---|\n";
+  for (const json& r : rows) {
+    const auto find = [&](const std::string& name) -> const json* {
+      for (const json& m : r.at("models"))
+        if (m.at("name") == name) return &m;
+      return nullptr;
+    };
+    md += "| " + r.at("label").get<std::string>() + " |";
+    std::string unflagged, effect;
+    for (const auto& [name, kind] : columns) {
+      const json* m = find(name);
+      if (!m) {
+        md += " – |";
+        continue;
+      }
+      if (m->contains("not_solved")) {  // a model that cannot solve the case, or whose solve failed (its error below)
+        md += m->at("not_solved").get<std::string>().rfind("failed", 0) == 0 ? " failed |" : " not solved |";
+        continue;
+      }
+      md += fmt::format(" {:.4f} ({:.1f} %) |", m->at("rmse_mm").get<double>(), 100 * m->at("relative").get<double>());
+      unflagged += fmt::format("{}{} {}", unflagged.empty() ? "" : ", ", name,
+                               number_or_dash(m->at("unflagged_mm"), "{:.4f}"));
+      const json& e = r.at("cut_effect");
+      if (!e.is_null() && e.at("models").contains(name)) {
+        const json& em = e.at("models").at(name);
+        effect += fmt::format("{}{} {:.4f} ({:.1f} %)", effect.empty() ? "" : ", ", name, em.at("rmse_mm").get<double>(),
+                              100 * em.value("rmse_relative_to_fem_peak", 0.0));
+      }
+    }
+    const json& bar = r.at("reference_error_bar");
+    const std::string error_bar = bar.value("known", false)
+                                      ? fmt::format("{:.3f} mm ({})", bar.at("rms_mm").get<double>(),
+                                                    bar.value("method", std::string()))
+                                      : "unknown: " + bar.value("why_unknown", std::string());
+    const json cloud = r.value("cloud_change", json::object());
+    const std::string converged = versus_extrapolated_cell(r.value("versus_extrapolated", json()));
+    const auto change_text = [](const json& change) {
+      return fmt::format("{:.4f} ({})", change.at("mm").get<double>(), change.at("measure").get<std::string>());
+    };
+    const json cloud_x = r.value("cloud_change_versus_extrapolated", json::object());
+    std::string cloud_change = cloud.value("known", false) ? change_text(cloud) : "–";
+    if (cloud_x.value("known", false)) cloud_change += "; against the extrapolated FEM " + change_text(cloud_x);
+    md += fmt::format(" {} | {} | {} | {} | {} | {} | {} | {:.2f} / {:.2f} / {:+.2f} |\n",
+                      number_or_dash(r.at("difference_mm"), "{:+.4f}"), unflagged.empty() ? "–" : unflagged,
+                      effect.empty() ? "–" : effect, error_bar, converged, cloud_change, table1_verdict(r),
+                      r.at("paper_enrichment_mm").get<double>(), r.at("paper_visibility_mm").get<double>(),
+                      r.at("paper_difference_mm").get<double>());
+  }
+  for (const json& r : rows)
+    for (const auto& [key, title] : {std::pair<std::string, std::string>{"cloud_change", "the meshless cloud change"},
+                                     {"cloud_change_versus_extrapolated",
+                                      "the meshless cloud change against the extrapolated FEM"}}) {
+    const json cloud = r.value(key, json::object());
+    if (cloud.value("known", false)) {
+      std::string runs;
+      for (const json& run : cloud.at("runs")) {
+        std::string models;
+        for (const auto& [name, v] : run.items())
+          if (v.is_object())
+            models += fmt::format("{}{} {}", models.empty() ? "" : ", ", name,
+                                  v.contains("rmse_mm") ? fmt::format("{:.4f} mm ({} nodes)", v.at("rmse_mm").get<double>(),
+                                                                      v.at("n_nodes").dump())
+                                                        : std::string("not solved"));
+        runs += fmt::format("\n- {}: {}", run.at("run").get<std::string>(),
+                            run.contains("unused") ? "unused, " + run.at("unused").get<std::string>() : models);
+      }
+      md += fmt::format("\n{}: {}, from the kept runs of its cloud studies:{}\n", r.at("label").get<std::string>(),
+                        title, runs);
+    }
+  }
+  for (const json& r : rows)
+    for (const json& m : r.at("models"))
+      if (m.contains("not_solved"))
+        md += fmt::format("\n{}, {}: {}.\n", r.at("label").get<std::string>(), m.at("name").get<std::string>(),
+                          m.at("not_solved").get<std::string>());
+  md += "\nThe paper's Table 1 is for its own lung models (§5.4); ours are the lung cases named in the plan, on another "
+        "lung, support and load, so compare the ranking and the relative size of the models, not the millimetres. "
+        "One column per model of each case's /compare list, with its role: proposed (the paper's model), baseline "
+        "(the paper's interactive meshless cutting model), other meshless models, and the floor (the undeformed body: "
+        "its RMSE is the reference's own RMS displacement, which any model must beat). The difference is the "
+        "proposed model's RMSE minus the baseline's. The cut effect is each model's cut solve minus its own uncut "
+        "solve, compared with the FEM's, so that the meshless model's common discretisation error does not decide "
+        "which cut treatment wins. The meshless cloud change is how far the difference moves when only the node cloud "
+        "changes (the plan's cloud_studies; where the proposed model solves on no other cloud, the largest change of "
+        "one model's RMSE stands in for it). Against the extrapolated FEM: each model's RMSE against the samples "
+        "that the committed mesh study (results/verify/fem.json) extrapolated from its two finest levels, whose bar "
+        "(their estimated error) is far smaller than that of the solved reference: how far each model is from the "
+        "converged FEM. The verdict's significance sets the difference of the RMSEs against the "
+        "reference's error bar (RMS) and the cloud change combined, sqrt(bar² + change²): above 2× significant, 1–2× "
+        "marginal; then the same against the extrapolated FEM, with their bar. Each case's full comparison (per-sample "
+        "errors, flags, timings, radar diagram) is in its sub-folder.\n";
+  return md;
+}
 
 std::string timing_md(const json& timing) {
   const json& models = timing.at("models");

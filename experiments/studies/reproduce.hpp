@@ -85,4 +85,9 @@ nlohmann::json table1_row(const ReproducePlan::Table1Case& t, const nlohmann::js
 /// change between node clouds, combined as sqrt(bar^2 + change^2).
 std::string table1_verdict(const nlohmann::json& row);
 
+/// table1.md from the rows of table1.json (table1_row, with "cloud_change" and "cloud_change_versus_extrapolated"
+/// added): one column per model, the difference, the bars, the verdict and the paper's figures; then footnotes (the
+/// runs behind each cloud change, the models not solved) and what the columns mean.
+std::string table1_md(const nlohmann::json& rows);
+
 }  // namespace experiments
