@@ -207,7 +207,6 @@ std::string versus_extrapolated_cell(const json& v) {
                             v.at("error_bar_mm").get<double>(), v.at("solved_reference_rmse_mm").get<double>());
 }
 
-
 /// The timing case with the plan's models (ReproducePlan::Timing::models; empty: the case's own list).
 core::Case with_timed_models(const core::Case& base, const std::vector<std::string>& models) {
   if (models.empty()) return base;
