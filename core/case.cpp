@@ -40,6 +40,8 @@ GeometrySpec read_geometry(const JsonReader& r) {
     g.fixed_region_refinement =
         refinement->in_range("fixed_region", 0.05, 1.0, true, true, g.fixed_region_refinement);
     g.load_patch_grading = refinement->in_range("load_patch_grading", 1.0, 3.0, true, true, g.load_patch_grading);
+    if (refinement->choice("load_patch_grading_zone", {"ball", "edge"}, "ball") == "edge")
+      g.load_patch_grading_zone = GeometrySpec::LoadPatchGradingZone::edge;
     g.crack_front_refinement =
         refinement->in_range("crack_front", 0.05, 1.0, true, true, g.crack_front_refinement);
     g.crack_front_grading = refinement->in_range("crack_front_grading", 1.0, 3.0, true, true, g.crack_front_grading);

@@ -35,6 +35,17 @@ struct GeometrySpec {
   /// against the load radius, not the case's own mesh size, so that the mesh at a given h is the same whichever
   /// command asks for it (a sweep over /geometry/mesh_size meets the study's levels); at h = r nothing changes.
   double load_patch_grading = 1.0;
+  /// Where the load patch's graded size applies (FEM mesh, load_patch_grading > 1):
+  ///  * ball: the whole refined ball about the load centre (core/load_patch_zone.hpp), so a mesh study refines the
+  ///    samples within it like h^g and those beyond it like h;
+  ///  * edge: only a band along the patch's edge (the traction jump), while the ball keeps load_patch_refinement * h,
+  ///    so that a mesh study refines every sample at one rate, like h, and its observed order is one number
+  ///    (docs/FEM_REFERENCE.md, "One rate at every sample"). Its meshes take their sizes from the size fields
+  ///    alone (Gmsh's extension of a curve's size into its faces would spread the edge's size over the patch), so
+  ///    they differ from the ball zone's everywhere, at h = r too.
+  /// At h = r, where the graded size is load_patch_refinement * h, edge adds no band.
+  enum class LoadPatchGradingZone { ball, edge };
+  LoadPatchGradingZone load_patch_grading_zone = LoadPatchGradingZone::ball;
   /// The crack's front (the edge of a /cut inside the body: a singular line, u ~ r^(1/2)), FEM mesh only: the local
   /// size along it is crack_front_refinement * h * (h / d)^(g - 1), h the mesh size being meshed, d the cut's depth
   /// and g = crack_front_grading, growing to h over one h. The defaults (1, 1) leave the front at the mesh size,

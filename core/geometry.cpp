@@ -86,8 +86,14 @@ void orient_outward(TriangleSurface* s) {
 
 /// `finest`: the smallest local size a size field asks for. Gmsh clamps every field to [MeshSizeMin, MeshSizeMax], so
 /// the floor must not cut off a graded region (at h = 5.3 mm the load patch's 1.17 mm would become 1.33 mm).
-void set_mesh_options(double size, double finest = std::numeric_limits<double>::infinity()) {
+/// `sizes_from_fields_only`: Gmsh's default extends the sizes of a face's boundary curves into its interior, so a face
+/// bounded by a finely graded curve (the load patch, inside its edge band) is meshed at that size throughout. The load
+/// patch's edge zone (GeometrySpec::LoadPatchGradingZone::edge) wants the band alone, so it turns that off; every
+/// other mesh keeps the default, so that the shipped meshes do not change.
+void set_mesh_options(double size, double finest = std::numeric_limits<double>::infinity(),
+                      bool sizes_from_fields_only = false) {
   gmsh::option::setNumber("General.NumThreads", 1);  // deterministic meshes
+  gmsh::option::setNumber("Mesh.MeshSizeExtendFromBoundary", sizes_from_fields_only ? 0 : 1);
   gmsh::option::setNumber("Mesh.MeshSizeMax", size);
   gmsh::option::setNumber("Mesh.MeshSizeMin", std::min(size / 4, finest));
   gmsh::option::setNumber("Mesh.MeshSizeFromCurvature", 0);
@@ -100,8 +106,9 @@ void set_mesh_options(double size, double finest = std::numeric_limits<double>::
 /// Mesh the current model's volume at `size` (model units), its size fields allowed down to `finest` (refine_regions),
 /// and return linear tets in metres.
 /// `after_generate` may edit the mesh before it is read (the FEM crack splits its nodes there).
-TetMesh mesh_volume(double size, double finest, double to_m, const std::function<void()>& after_generate = {}) {
-  set_mesh_options(size, finest);
+TetMesh mesh_volume(double size, double finest, bool sizes_from_fields_only, double to_m,
+                    const std::function<void()>& after_generate = {}) {
+  set_mesh_options(size, finest, sizes_from_fields_only);
   gmsh::model::mesh::generate(3);
   if (after_generate) after_generate();
   return read_gmsh_tets(to_m);
@@ -285,7 +292,10 @@ int add_ball_field(const Eigen::Vector3d& centre, double radius, double thicknes
 
 /// True when every boundary curve of model face `face` lies within `radius` of `centre` (model units): the face is a
 /// piece of the surface inside the ball. (A face's centre of mass would not do: a large face with the imprinted patch
-/// as a hole has its centre inside the ball too.)
+/// as a hole has its centre inside the ball too.) The imprint's curves are exact circles on a plane (the built-in
+/// lung's medial face) but OpenCASCADE's approximations of the sphere's intersection on a curved surface (its lateral
+/// face, under the probe), hence the relative tolerance kOnBallTolerance.
+constexpr double kOnBallTolerance = 1e-3;
 bool face_inside_ball(int face, const Eigen::Vector3d& centre, double radius) {
   constexpr int kSamplesPerCurve = 8;
   gmsh::vectorpair curves;
@@ -297,34 +307,62 @@ bool face_inside_ball(int face, const Eigen::Vector3d& centre, double radius) {
     for (int k = 0; k <= kSamplesPerCurve; ++k) params.push_back(lo[0] + (hi[0] - lo[0]) * k / kSamplesPerCurve);
     gmsh::model::getValue(1, std::abs(curve.second), params, xyz);
     for (std::size_t k = 0; k + 2 < xyz.size(); k += 3)
-      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + 1e-6)) return false;
+      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + kOnBallTolerance)) return false;
   }
   return true;
 }
 
-/// The curves where the imprinted fixed region (near_point) meets the rest of the body's surface: the clamp's edge,
-/// from the current model (after every fragment: the region imprint and a crack). The fixed patch is the part of the
-/// body's outer surface inside the fixed ball; its combined boundary is the edge.
-std::vector<double> clamp_edge_curves(const Case& c) {
-  gmsh::vectorpair volumes, outer, fixed, edge;
+/// The curves where the part of the body's outer surface inside a ball (an imprinted region: the fixed region or the
+/// load patch) meets the rest of the surface, from the current model (after every fragment: the region imprints and
+/// a crack). Model units. The region is the outer faces inside the ball; its combined boundary is the edge.
+std::vector<double> imprinted_patch_edge_curves(const Eigen::Vector3d& centre, double radius) {
+  gmsh::vectorpair volumes, outer, patch, edge;
   gmsh::model::getEntities(volumes, 3);
   gmsh::model::getBoundary(volumes, outer, /*combined=*/true, /*oriented=*/false);
-  const Eigen::Vector3d centre = c.fixed_region.point / 1e-3;
   for (const auto& face : outer)
-    if (face_inside_ball(std::abs(face.second), centre, c.fixed_region.distance / 1e-3))
-      fixed.emplace_back(2, std::abs(face.second));
+    if (face_inside_ball(std::abs(face.second), centre, radius)) patch.emplace_back(2, std::abs(face.second));
   std::vector<double> curves;
-  if (fixed.empty()) return curves;
-  gmsh::model::getBoundary(fixed, edge, /*combined=*/true, /*oriented=*/false);
+  if (patch.empty()) return curves;
+  gmsh::model::getBoundary(patch, edge, /*combined=*/true, /*oriented=*/false);
   for (const auto& curve : edge) curves.push_back(std::abs(curve.second));
   return curves;
 }
 
+/// The clamp's edge: where the imprinted near_point fixed region meets the rest of the body's surface.
+std::vector<double> clamp_edge_curves(const Case& c) {
+  return imprinted_patch_edge_curves(c.fixed_region.point / 1e-3, c.fixed_region.distance / 1e-3);
+}
+
+/// The fields that refine under the probe (core/load_patch_zone.hpp). Returns their tags and the finest size.
+///  * the ball of kLoadPatchBallRadii * r: load_patch_refinement * size, growing to size over one load radius; on the
+///    FEM mesh with the grading zone `ball`, GeometrySpec::load_patch_size instead (graded like h^g);
+///  * on the FEM mesh with the grading zone `edge`, where the graded size is below the ball's: that size along the
+///    patch's edge (the traction jump), growing to the mesh size over one mesh size (so to the ball's size within
+///    about half of that).
+std::pair<std::vector<double>, double> load_patch_fields(const Case& c, const Eigen::Vector3d& load_centre,
+                                                         double size, bool fem_mesh) {
+  const double r = c.load.radius / 1e-3;
+  const double ungraded = c.geometry.load_patch_refinement * size;
+  const double graded = fem_mesh ? c.geometry.load_patch_size(size, r) : ungraded;
+  const bool edge_band = c.geometry.load_patch_grading_zone == GeometrySpec::LoadPatchGradingZone::edge;
+  const double ball_size = edge_band ? ungraded : graded;
+  std::vector<double> fields{
+      static_cast<double>(add_ball_field(load_centre / 1e-3, kLoadPatchBallRadii * r, r, ball_size, size))};
+  double finest = ball_size;
+  if (edge_band && graded < ungraded) {
+    const std::vector<double> edge = imprinted_patch_edge_curves(load_centre / 1e-3, r);
+    if (edge.empty()) throw std::runtime_error("the load patch's imprint has no edge curve to grade the mesh along");
+    fields.push_back(add_curve_threshold_field(edge, graded, size));  // the ball's field keeps `ungraded` within it
+    finest = graded;
+  }
+  return {fields, finest};
+}
+
 /// Refine where the solution is sensitive to the region boundaries, in proportion to the mesh size so that every level
 /// of a mesh study refines there too (model units, mm):
-///  * elements of load_patch_refinement * size within kLoadPatchBallRadii * r of the load centre
-///    (core/load_patch_zone.hpp; the FEM mesh: GeometrySpec::load_patch_size, graded by load_patch_grading): the
-///    patch, its edge (where the traction jumps) and the samples;
+///  * elements of load_patch_refinement * size within kLoadPatchBallRadii * r of the load centre: the patch, its
+///    edge (where the traction jumps) and the samples; on the FEM mesh graded by load_patch_grading over the ball or
+///    along the patch's edge (load_patch_fields);
 ///  * elements of fixed_region_refinement * size along the edge of a near_point fixed region (the clamp's edge,
 ///    where most of the lung's error lives), growing to the mesh size over one mesh size (`tissue case check` prints the node
 ///    counts this costs);
@@ -333,12 +371,7 @@ std::vector<double> clamp_edge_curves(const Case& c) {
 /// Returns the smallest of these sizes (model units), for the mesher's size floor (set_mesh_options).
 double refine_regions(const Case& c, const Eigen::Vector3d& load_centre, double size, bool fem_mesh,
                       const CrackEmbedding* crack) {
-  const double r = c.load.radius / 1e-3;
-  const double patch_size =
-      fem_mesh ? c.geometry.load_patch_size(size, r) : c.geometry.load_patch_refinement * size;
-  std::vector<double> fields{
-      static_cast<double>(add_ball_field(load_centre / 1e-3, kLoadPatchBallRadii * r, r, patch_size, size))};
-  double finest = patch_size;
+  auto [fields, finest] = load_patch_fields(c, load_centre, size, fem_mesh);
   if (c.fixed_region.kind == FixedRegionSpec::Kind::near_point) {
     const std::vector<double> edge = clamp_edge_curves(c);
     if (!edge.empty()) {
@@ -378,7 +411,9 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const double finest = refine_regions(c, load_centre, size / to_m, fem_mesh, crack ? &*crack : nullptr);
   TetMesh mesh;
   try {
-    mesh = mesh_volume(size / to_m, finest, to_m, [&] {
+    const bool edge_zone =
+        fem_mesh && c.geometry.load_patch_grading_zone == GeometrySpec::LoadPatchGradingZone::edge;
+    mesh = mesh_volume(size / to_m, finest, edge_zone, to_m, [&] {
       if (crack) split_crack_nodes(*crack);
     });
   } catch (const std::string& gmsh_error) {  // the Gmsh SDK throws its last error as a string

@@ -134,6 +134,11 @@ TEST_F(BadCase, LoadPatchGradingBelowOne) {
   expect_error(write_case(base_), {"/geometry/refinement/load_patch_grading", "[1, 3]", "0.5"});
 }
 
+TEST_F(BadCase, LoadPatchGradingZoneUnknown) {
+  base_["geometry"]["refinement"] = {{"load_patch_grading", 2.0}, {"load_patch_grading_zone", "rim"}};
+  expect_error(write_case(base_), {"/geometry/refinement/load_patch_grading_zone", "ball", "edge", "rim"});
+}
+
 TEST_F(BadCase, CrackFrontGradingAboveThree) {
   base_["geometry"]["refinement"] = {{"crack_front", 0.5}, {"crack_front_grading", 4.0}};
   expect_error(write_case(base_), {"/geometry/refinement/crack_front_grading", "[1, 3]", "4"});

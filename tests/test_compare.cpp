@@ -295,6 +295,27 @@ TEST(MeshStudyEstimate, EachGroupOfSamplesGivesItsOwnOrder) {
   for (std::size_t l = 0; l < all.size(); ++l) EXPECT_NEAR(all[l], e.json["observed_orders"][l].get<double>(), 1e-12);
 }
 
+TEST(MeshStudyEstimate, ExpectedOrderIsTheRoughestLinesOrTheFacetedSurfaces) {
+  const std::string configs = TISSUE_TEST_CONFIG_DIR;
+  // lung_small: tapered elastic support, patch edge graded like h^2 (order 4), P2 (3): the faceted surface's 2.
+  core::Case small = core::load_case(configs + "/lung_small.json");
+  EXPECT_EQ(experiments::expected_sample_order(small), 2.0);
+  small.fem.degree = 1;
+  EXPECT_EQ(experiments::expected_sample_order(small), 2.0);
+  small.fixed_region.taper = 0.0;  // k_s jumps at the support's edge: order 2
+  EXPECT_EQ(experiments::expected_sample_order(small), 2.0);
+  // lung_large: the crack's front graded like h^g gives g.
+  core::Case large = core::load_case(configs + "/lung_large.json");
+  EXPECT_EQ(experiments::expected_sample_order(large), 2.0);
+  large.geometry.crack_front_grading = 1.5;
+  EXPECT_EQ(experiments::expected_sample_order(large), 1.5);
+  large.geometry.crack_front_grading = 1.0;
+  EXPECT_EQ(experiments::expected_sample_order(large), 1.0);
+  large.geometry.crack_front_grading = 3.0;  // beyond the surface's 2
+  EXPECT_EQ(experiments::expected_sample_order(large), 2.0);
+  EXPECT_EQ(experiments::expected_sample_order(core::load_case(configs + "/lung_small_clamp.json")), 1.0);
+}
+
 TEST(CompareSummary, EachModelsCutEffectAgainstTheFems) {
   experiments::Comparison c = synthetic_comparison(false);
   Eigen::MatrixXd fem_effect = Eigen::MatrixXd::Zero(3, 3), enr_effect = fem_effect, vis_effect = fem_effect;

@@ -267,6 +267,55 @@ TEST(BuiltinLung, LoadPatchIsRefinedBelowAQuarterOfTheMeshSize) {
   EXPECT_LT(mean, 1.35 * expected);
 }
 
+TEST(BuiltinLung, EdgeZoneGradesOnlyAlongTheLoadPatchsEdge) {
+  // /geometry/refinement/load_patch_grading_zone "edge": the graded size only along the patch's edge, the ball keeping
+  // load_patch_refinement * h, so a mesh study refines every sample at one rate. At h = 9 mm with g = 2 the edge asks
+  // for 0.5 * 9 * 9 / 12 = 3.375 mm and the ball keeps 4.5 mm; "ball" grades the whole ball to 3.375 mm. The edge zone
+  // takes the sizes from the size fields alone (Gmsh would otherwise extend the edge's size over the whole patch,
+  // which its edge bounds; set_mesh_options), so the rest of the body is coarser too. Measured (mean tetrahedron
+  // edge): beside the patch's edge 3.27 mm in both zones; about the load centre 5.07 mm (edge) and 3.96 mm (ball);
+  // 25,894 against 71,129 tetrahedra.
+  core::Case c = core::load_case(kConfigDir + "/lung_small.json");
+  c.geometry.load_patch_grading = 2.0;
+  core::GeometryOptions options;
+  options.build_node_cloud = false;
+  options.fem_mesh_size = 0.009;
+  const double graded = c.geometry.load_patch_size(0.009, c.load.radius);
+  const double ungraded = c.geometry.load_patch_refinement * 0.009;
+  ASSERT_NEAR(graded, 0.003375, 1e-15);
+  std::map<std::string, std::pair<double, double>> measured;  // zone -> mean edge beside the patch's edge, at centre
+  std::map<std::string, int> tets;
+  for (const auto zone : {core::GeometrySpec::LoadPatchGradingZone::edge, core::GeometrySpec::LoadPatchGradingZone::ball}) {
+    c.geometry.load_patch_grading_zone = zone;
+    const core::Geometry g = core::build_geometry(c, options);
+    auto on_surface = [&](const Eigen::Vector3d& p) { return g.surface.closest_point(p).distance < 1e-4; };
+    auto beside_edge = [&](const Eigen::Vector3d& p) {
+      return std::abs((p - g.load_centre).norm() - c.load.radius) < 0.5 * graded && on_surface(p);
+    };
+    const auto [edge_mean, edge_count] = mean_edge(g.fem_mesh, [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+      return beside_edge(p) && beside_edge(q);
+    });
+    const auto [centre_mean, centre_count] =
+        mean_edge(g.fem_mesh, [&](const Eigen::Vector3d& p, const Eigen::Vector3d& q) {
+          return (p - g.load_centre).norm() < 0.5 * c.load.radius && (q - g.load_centre).norm() < 0.5 * c.load.radius;
+        });
+    ASSERT_GT(edge_count, 0);
+    ASSERT_GT(centre_count, 0);
+    const std::string name = zone == core::GeometrySpec::LoadPatchGradingZone::edge ? "edge" : "ball";
+    std::cout << name << " zone: mean edge beside the patch's edge " << edge_mean * 1e3 << " mm (" << edge_count
+              << "), about the load centre " << centre_mean * 1e3 << " mm (" << centre_count << "), "
+              << g.fem_mesh.num_tets() << " tets\n";
+    measured[name] = {edge_mean, centre_mean};
+    tets[name] = g.fem_mesh.num_tets();
+  }
+  // The band refines less than the whole ball.
+  EXPECT_LT(tets["edge"], tets["ball"] / 2);
+  // Both zones grade the patch's edge alike; only the ball zone grades the centre (where samples lie).
+  EXPECT_NEAR(measured["edge"].first, measured["ball"].first, 0.1 * measured["ball"].first);
+  EXPECT_NEAR(measured["ball"].second, 1.2 * graded, 0.15 * graded);
+  EXPECT_NEAR(measured["edge"].second, 1.2 * ungraded, 0.15 * ungraded);
+}
+
 TEST(RealLobe, TetVolumeEqualsStlEnclosedVolume) {
   const std::string stl = std::string(TISSUE_SHARED_DATA_DIR) + "/lung/lower_lobe_of_left_lung_surface.stl";
   if (!std::filesystem::exists(stl)) GTEST_SKIP() << "real lung STL not found at " << stl << " (../shared absent)";

@@ -32,10 +32,11 @@ std::vector<double> orders_of_each_three(const std::vector<Eigen::MatrixXd>& u, 
 }  // namespace
 
 double expected_sample_order(const core::Case& c) {
-  // header
-  if (c.fixed_region.support == core::FixedRegionSpec::Support::clamp) return 1.0;
-  if (c.cut) return std::min(c.geometry.crack_front_grading, 2.0);
-  return 2.0;
+  // header: the smallest of the element's own order, the faceted surface's and the singular lines'
+  double order = std::min(c.fem.degree + 1.0, 2.0);
+  if (c.fixed_region.support == core::FixedRegionSpec::Support::clamp) order = std::min(order, 1.0);
+  if (c.cut) order = std::min(order, c.geometry.crack_front_grading);
+  return order;
 }
 
 MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,

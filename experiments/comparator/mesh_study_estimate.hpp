@@ -16,15 +16,23 @@ constexpr double kOrderTolerance = 0.3;
 /// asymptotic range never assumes less, since order 0.2 would give 28 % from a 1 % change.
 constexpr double kLowestOrder = 1.0;
 
-/// The order at which a case's sample displacements converge under the study's refinement, set by the roughest
-/// line of the solution (docs/FEM_REFERENCE.md, "The order the samples converge at"): the samples lie away from
-/// it, so their error is the square of the energy error there, h^(2 lambda) for a singularity r^lambda.
-///  * a clamp's edge, r^(1/2), refined in proportion to h: order 1;
-///  * a crack's front, r^(1/2), whose local size falls as h^g (/geometry/refinement/crack_front_grading g): order
-///    min(g, 2);
-///  * otherwise (an elastic support, whose traction only jumps at the load patch's edge, u ~ r log r, and, untapered,
-///    at the support's edge): order 2. (Ungraded, the load patch's edge gives about order 1 on the lung, 1.13 / 1.04
-///    observed; the estimate then takes the observed order, which gives the larger bar.)
+/// The order at which a case's sample displacements converge under the study's refinement (docs/EXPERIMENTS.md,
+/// "The reference's error bar", "Which order is expected"). The samples lie away from the solution's rough lines, so
+/// each line holds them to about the square of its energy error, (h_line)^(2 lambda) for a singularity r^lambda
+/// whose local size h_line falls like h^g. The smallest of:
+///  * degree + 1 (P2: 3), the element's own pointwise order where the solution is smooth, the samples' local size
+///    being proportional to h;
+///  * 2: the meshes are straight-sided tetrahedra (an affine mapping, reference_fem/viscoelastic_solver.cpp), so a
+///    curved surface is faceted, O(h^2) from the true one, and P2 on such a domain converges like h^2 in
+///    displacement, not h^3 (Strang & Berger 1971; Ciarlet, The Finite Element Method for Elliptic Problems,
+///    §4.4). This is what sets the lung's expected order wherever its other lines are graded;
+///  * a clamp's edge, r^(1/2), refined in proportion to h: 1;
+///  * a crack's front, r^(1/2), graded like h^g (/geometry/refinement/crack_front_grading): g.
+/// Two lines give 2 or more and so never lower it: an elastic support's edge without a taper (k_s jumps, u ~ r log r,
+/// refined like h: 2) and the load patch's edge (a traction jump, u ~ r log r, graded like h^g: 2g). Ungraded, the
+/// patch's edge lies within an element or two of the samples at practical sizes, so they see its local error and
+/// converge at about 1 (1.13 / 1.04 observed on the lung); the estimate then takes the observed order, which gives
+/// the larger bar.
 double expected_sample_order(const core::Case& c);
 
 struct MeshStudyEstimate {
