@@ -170,8 +170,8 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
 }
 
 /// The observed orders of the samples within core::kLoadPatchBallRadii load radii of the load centre and of those
-/// beyond, apart (experiments::observed_orders): with a graded load patch the two groups are refined at different
-/// rates. Null when either group is empty. The JSON has a "sentence" for fem.md.
+/// beyond, apart (experiments::observed_orders): with the load patch graded over its ball the two groups are refined
+/// at different rates. Null when either group is empty. The JSON has a "sentence" for fem.md.
 nlohmann::json orders_by_zone(const core::Case& c, const LungLevel& level, const std::vector<Eigen::MatrixXd>& u,
                               const std::vector<double>& h_mm) {
   const double ball = core::kLoadPatchBallRadii * c.load.radius;
@@ -180,6 +180,11 @@ nlohmann::json orders_by_zone(const core::Case& c, const LungLevel& level, const
     (level.sample_points.row(i).transpose() - level.load_centre).norm() <= ball ? within.push_back(i)
                                                                               : beyond.push_back(i);
   if (within.empty() || beyond.empty()) return nullptr;
+  // The grading zone "edge" grades only a band along the patch's edge, so the ball itself falls like h.
+  const std::string within_rate =
+      c.geometry.load_patch_grading_zone == core::GeometrySpec::LoadPatchGradingZone::edge
+          ? fmt::format("h (graded like h^{:g} only along the patch's edge)", c.geometry.load_patch_grading)
+          : fmt::format("h^{:g}", c.geometry.load_patch_grading);
   const std::vector<double> orders_within = observed_orders(u, h_mm, within);
   const std::vector<double> orders_beyond = observed_orders(u, h_mm, beyond);
   auto listed = [](const std::vector<double>& orders) {
@@ -192,10 +197,10 @@ nlohmann::json orders_by_zone(const core::Case& c, const LungLevel& level, const
           {"beyond", {{"samples", beyond}, {"observed_orders", orders_beyond}}},
           {"sentence",
            fmt::format("By zone (the refined ball of {:.1f} mm about the load centre, where the local size falls like "
-                       "h^{:g}; beyond it like h): observed orders {} for the {} samples within, {} for the {} "
+                       "{}; beyond it like h): observed orders {} for the {} samples within, {} for the {} "
                        "beyond.",
-                       ball * 1e3, c.geometry.load_patch_grading, listed(orders_within), within.size(),
-                       listed(orders_beyond), beyond.size())}};
+                       ball * 1e3, within_rate, listed(orders_within), within.size(), listed(orders_beyond),
+                       beyond.size())}};
 }
 
 nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& config, const core::Case& c,
