@@ -73,6 +73,19 @@ def print_group_orders(study, h, u):
               f"{', '.join(f'{x:.2f}' for x in orders)}")
 
 
+def print_last_changes(h, u):
+    """Each sample's last two changes between levels [um] and the cosine between them: a power of h moves every
+    sample the same way at every level (cosine 1), so a sample that turns shows where the levels stop following one."""
+    if len(h) < 3:
+        return
+    by_sample = u.reshape(len(h), -1, 3)
+    d1, d2 = by_sample[-2] - by_sample[-3], by_sample[-1] - by_sample[-2]
+    n1, n2 = np.linalg.norm(d1, axis=1), np.linalg.norm(d2, axis=1)
+    cosines = np.sum(d1 * d2, axis=1) / np.maximum(n1 * n2, 1e-300)
+    print(f"  each sample's changes {h[-3]:g} -> {h[-2]:g} and {h[-2]:g} -> {h[-1]:g} mm [um], and their cosine: "
+          + "; ".join(f"{i}: {1e3 * a:.2f}, {1e3 * b:.2f}, {c:+.2f}" for i, (a, b, c) in enumerate(zip(n1, n2, cosines))))
+
+
 def main(path):
     with open(path) as f:
         studies = json.load(f)["mesh_convergence"]
@@ -85,6 +98,7 @@ def main(path):
         for i, order in enumerate(observed_orders(h, u)):
             print(f"  observed order over {h[i]:g} / {h[i + 1]:g} / {h[i + 2]:g} mm: {order:.2f}")
         print_group_orders(study, h, u)
+        print_last_changes(h, u)
         print("  | fit | levels | residual RMS [mm] | finest level from u* (RMS) |")
         print("  |---|---|---|---|")
         for name, powers in FITS:
