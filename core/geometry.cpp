@@ -307,7 +307,8 @@ bool face_inside_ball(int face, const Eigen::Vector3d& centre, double radius) {
     for (int k = 0; k <= kSamplesPerCurve; ++k) params.push_back(lo[0] + (hi[0] - lo[0]) * k / kSamplesPerCurve);
     gmsh::model::getValue(1, std::abs(curve.second), params, xyz);
     for (std::size_t k = 0; k + 2 < xyz.size(); k += 3)
-      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + kOnBallTolerance)) return false;
+      if ((Eigen::Vector3d(xyz[k], xyz[k + 1], xyz[k + 2]) - centre).norm() > radius * (1.0 + kOnBallTolerance))
+        return false;
   }
   return true;
 }
@@ -333,6 +334,11 @@ std::vector<double> clamp_edge_curves(const Case& c) {
   return imprinted_patch_edge_curves(c.fixed_region.point / 1e-3, c.fixed_region.distance / 1e-3);
 }
 
+/// True when the FEM mesh grades the load patch only along its edge (the node cloud is never graded).
+bool grades_only_the_patch_edge(const Case& c, bool fem_mesh) {
+  return fem_mesh && c.geometry.load_patch_grading_zone == GeometrySpec::LoadPatchGradingZone::edge;
+}
+
 /// The fields that refine under the probe (core/load_patch_zone.hpp). Returns their tags and the finest size.
 ///  * the ball of kLoadPatchBallRadii * r: load_patch_refinement * size, growing to size over one load radius; on the
 ///    FEM mesh with the grading zone `ball`, GeometrySpec::load_patch_size instead (graded like h^g);
@@ -344,14 +350,17 @@ std::pair<std::vector<double>, double> load_patch_fields(const Case& c, const Ei
   const double r = c.load.radius / 1e-3;
   const double ungraded = c.geometry.load_patch_refinement * size;
   const double graded = fem_mesh ? c.geometry.load_patch_size(size, r) : ungraded;
-  const bool edge_band = c.geometry.load_patch_grading_zone == GeometrySpec::LoadPatchGradingZone::edge;
+  const bool edge_band = grades_only_the_patch_edge(c, fem_mesh);
   const double ball_size = edge_band ? ungraded : graded;
   std::vector<double> fields{
       static_cast<double>(add_ball_field(load_centre / 1e-3, kLoadPatchBallRadii * r, r, ball_size, size))};
   double finest = ball_size;
   if (edge_band && graded < ungraded) {
     const std::vector<double> edge = imprinted_patch_edge_curves(load_centre / 1e-3, r);
-    if (edge.empty()) throw std::runtime_error("the load patch's imprint has no edge curve to grade the mesh along");
+    if (edge.empty())
+      throw CaseError(c.source_file, "/geometry/refinement/load_patch_grading_zone",
+                      "the load patch's imprint on the surface has no edge curve to grade the mesh along; expected "
+                      "\"ball\" for this body (or a load point whose patch lies on the surface)");
     fields.push_back(add_curve_threshold_field(edge, graded, size));  // the ball's field keeps `ungraded` within it
     finest = graded;
   }
@@ -411,9 +420,7 @@ TetMesh mesh_body(const Case& c, const TriangleSurface& surface, double size, co
   const double finest = refine_regions(c, load_centre, size / to_m, fem_mesh, crack ? &*crack : nullptr);
   TetMesh mesh;
   try {
-    const bool edge_zone =
-        fem_mesh && c.geometry.load_patch_grading_zone == GeometrySpec::LoadPatchGradingZone::edge;
-    mesh = mesh_volume(size / to_m, finest, edge_zone, to_m, [&] {
+    mesh = mesh_volume(size / to_m, finest, grades_only_the_patch_edge(c, fem_mesh), to_m, [&] {
       if (crack) split_crack_nodes(*crack);
     });
   } catch (const std::string& gmsh_error) {  // the Gmsh SDK throws its last error as a string

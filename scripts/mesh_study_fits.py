@@ -90,7 +90,10 @@ def main(path):
     with open(path) as f:
         studies = json.load(f)["mesh_convergence"]
     for case, study in studies.items():
-        levels = study["levels"]
+        levels = [level for level in study["levels"] if "sample_displacements_mm" in level and "error" not in level]
+        for level in study["levels"]:
+            if level not in levels:
+                print(f"{case}: the {level['mesh_size_mm']:g} mm level did not solve; left out")
         h = np.array([level["mesh_size_mm"] for level in levels])
         u = np.array([np.ravel(level["sample_displacements_mm"]) for level in levels])
         peak = np.max(np.linalg.norm(u[-1].reshape(-1, 3), axis=1))
