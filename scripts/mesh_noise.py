@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""How much does a mesh study's observed order depend on the particular mesh at each level?
+
+Gmsh's unstructured meshes are not nested: two meshes of nominal sizes 12 and 12.12 mm share no element, and the
+samples move between them by a mesh-to-mesh "noise" that has nothing to do with h. A level's change is the
+difference of two such meshes, so its noise enters every observed order. This script measures it: beside a
+committed study (`tissue verify fem`, results/verify/fem.json), studies of the same case at sizes a percent or so
+away from its levels (jittered: the smooth error moves by about p percent of itself, so what moves more is noise)
+are matched to the nearest level (within 5 % of its size). For each level with jittered meshes it prints:
+
+- the noise: the RMS over the samples of each mesh's distance from the meshes' mean, with n - 1 (um and % of the
+  peak), beside the level's change to the next finer level;
+- each jittered mesh's RMS distance from the study's mesh at its level (also the way to compare two studies of the
+  same sizes that differ in something else, e.g. how the samples are read);
+- for each three consecutive levels, the observed order of the study's own meshes (as `verify fem` computes it:
+  log(|u_b - u_a| / |u_c - u_b|) / log r, norms over every sample) and its range over every combination of the
+  meshes at those levels, and the order of the levels' means.
+
+Usage: scripts/mesh_noise.py STUDY.json CASE JITTERED.json [JITTERED.json ...]
+"""
+import argparse
+import itertools
+import json
+import math
+
+import numpy as np
+
+
+def solved_levels(path, case):
+    try:
+        with open(path) as f:
+            study = json.load(f)["mesh_convergence"][case]
+    except OSError as e:
+        raise SystemExit(f"{path}: cannot read it ({e.strerror}); expected the fem.json of `tissue verify fem`")
+    except (ValueError, KeyError):
+        raise SystemExit(f"{path}: no /mesh_convergence/{case} in it; expected the fem.json of `tissue verify fem` "
+                         f"run on that case")
+    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"]))
+            for l in study["levels"] if "sample_displacements_mm" in l and "error" not in l]
+
+
+def rms(d):
+    return math.sqrt((d ** 2).sum() / d.shape[0])
+
+
+def order(a, b, c, ratio):
+    d1, d2 = np.linalg.norm(b - a), np.linalg.norm(c - b)
+    return math.log(d1 / d2) / math.log(ratio) if d2 > 0 and d1 > d2 else 0.0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("study")
+    parser.add_argument("case")
+    parser.add_argument("jittered", nargs="+")
+    args = parser.parse_args()
+
+    levels = solved_levels(args.study, args.case)
+    if len(levels) < 3:
+        raise SystemExit(f"{args.study}: {args.case} has {len(levels)} solved levels; an order needs 3")
+    h = [size for size, _ in levels]
+    meshes = [[u] for _, u in levels]  # the study's own mesh first
+    distances = []
+    for path in args.jittered:
+        for size, u in solved_levels(path, args.case):
+            nearest = min(range(len(h)), key=lambda l: abs(h[l] - size))
+            if abs(h[nearest] - size) > 0.05 * h[nearest]:
+                print(f"{path}: level {size:g} mm is more than 5 % from every level of {args.study}: left out")
+                continue
+            meshes[nearest].append(u)
+            distances.append((path, size, h[nearest], u - levels[nearest][1]))
+    peak = max(np.linalg.norm(levels[-1][1], axis=1))
+
+    print(f"{args.case}: {len(h)} levels, peak sample displacement {peak:.4f} mm")
+    print("| jittered study | its level | the study's level | RMS distance | each sample's distance [um] |")
+    print("|---|---|---|---|---|")
+    for path, size, level, d in distances:
+        each = ", ".join(f"{x * 1e3:.1f}" for x in np.linalg.norm(d, axis=1))
+        print(f"| {path} | {size:g} mm | {level:g} mm | {rms(d) * 1e3:.2f} um ({rms(d) / peak * 100:.3f} %) | {each} |")
+    print("| level | meshes | noise (RMS) | change to the next level (RMS) | noise / change |")
+    print("|---|---|---|---|---|")
+    for l, group in enumerate(meshes):
+        change = rms(levels[l + 1][1] - levels[l][1]) if l + 1 < len(h) else None
+        change_text = f"{change * 1e3:.2f} um" if change is not None else ""
+        if len(group) < 2:
+            print(f"| {h[l]:g} mm | 1 | not measured | {change_text} | |")
+            continue
+        mean = sum(group) / len(group)
+        noise = math.sqrt(sum(rms(u - mean) ** 2 for u in group) / (len(group) - 1))
+        ratio = f"{noise / change:.2f}" if change else ""
+        print(f"| {h[l]:g} mm | {len(group)} | {noise * 1e3:.2f} um ({noise / peak * 100:.3f} %) | {change_text} | "
+              f"{ratio} |")
+
+    print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means |")
+    print("|---|---|---|---|")
+    for l in range(2, len(h)):
+        ratio = 0.5 * (h[l - 2] / h[l - 1] + h[l - 1] / h[l])
+        own = order(levels[l - 2][1], levels[l - 1][1], levels[l][1], ratio)
+        combos = [order(a, b, c, ratio) for a, b, c in itertools.product(meshes[l - 2], meshes[l - 1], meshes[l])]
+        means = [sum(g) / len(g) for g in meshes[l - 2:l + 1]]
+        spread = f"{min(combos):.2f} to {max(combos):.2f} ({len(combos)})" if len(combos) > 1 else "one mesh each"
+        print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | {order(*means, ratio):.2f} |")
+    print("An order of 0.00 means the changes did not decrease. Levels with one mesh add no noise to the range, so "
+          "the range is a lower bound on the spread where a level was not jittered.")
+
+
+if __name__ == "__main__":
+    main()
