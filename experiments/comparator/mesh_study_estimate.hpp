@@ -51,7 +51,8 @@ struct MeshStudyEstimate {
 
 /// `u[l]`: every sample displacement of level l (any shape, same for all levels), `h_mm[l]` its mesh size,
 /// coarse to fine. The error is relative to the finest level's norm. An observed order within kOrderTolerance of
-/// `expected_order` is extrapolated with. Any other is not in the asymptotic range, and the estimate assumes the
+/// `expected_order` is extrapolated with. Any other is not in the asymptotic range (or, on non-nested meshes, is
+/// blurred by their mesh-to-mesh noise; docs/FEM_REFERENCE.md), and the estimate assumes the
 /// order that gives the larger bar: below the expected order the observed one (not less than kLowestOrder: a coarse
 /// level not yet asymptotic, or samples within an element of a singular line, which converge at about order 1
 /// before the mesh resolves them), above it the expected one (a larger order would shrink the bar on the strength
