@@ -16,7 +16,10 @@ are matched to the nearest level (within 5 % of its size). For each level with j
   log(|u_b - u_a| / |u_c - u_b|) / log r, norms over every sample) and its range over every combination of the
   meshes at those levels, and the order of the levels' means.
 
-Usage: scripts/mesh_noise.py STUDY.json CASE JITTERED.json [JITTERED.json ...]
+A study run with `tissue verify fem --meshes-per-level N` holds its own meshes per level (each level's samples are
+then their mean); they are read as the level's meshes, and no jittered study is needed.
+
+Usage: scripts/mesh_noise.py STUDY.json CASE [JITTERED.json ...]
 """
 import argparse
 import itertools
@@ -26,7 +29,7 @@ import math
 import numpy as np
 
 
-def solved_levels(path, case):
+def solved_levels(path, case, with_meshes=False):
     try:
         with open(path) as f:
             study = json.load(f)["mesh_convergence"][case]
@@ -35,8 +38,12 @@ def solved_levels(path, case):
     except (ValueError, KeyError):
         raise SystemExit(f"{path}: no /mesh_convergence/{case} in it; expected the fem.json of `tissue verify fem` "
                          f"run on that case")
-    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"]))
-            for l in study["levels"] if "sample_displacements_mm" in l and "error" not in l]
+    solved = [l for l in study["levels"] if "sample_displacements_mm" in l and "error" not in l]
+    if with_meshes:  # each level's own meshes when `verify fem --meshes-per-level` made it, else its one mesh
+        return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"]),
+                 [np.array(m["sample_displacements_mm"]) for m in l.get("meshes", [])] or
+                 [np.array(l["sample_displacements_mm"])]) for l in solved]
+    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"])) for l in solved]
 
 
 def rms(d):
@@ -52,14 +59,15 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("study")
     parser.add_argument("case")
-    parser.add_argument("jittered", nargs="+")
+    parser.add_argument("jittered", nargs="*")
     args = parser.parse_args()
 
-    levels = solved_levels(args.study, args.case)
-    if len(levels) < 3:
-        raise SystemExit(f"{args.study}: {args.case} has {len(levels)} solved levels; an order needs 3")
+    with_meshes = solved_levels(args.study, args.case, with_meshes=True)
+    if len(with_meshes) < 3:
+        raise SystemExit(f"{args.study}: {args.case} has {len(with_meshes)} solved levels; an order needs 3")
+    levels = [(size, u) for size, u, _ in with_meshes]
     h = [size for size, _ in levels]
-    meshes = [[u] for _, u in levels]  # the study's own mesh first
+    meshes = [list(own) for _, _, own in with_meshes]  # the study's own mesh (or meshes) first
     distances = []
     for path in args.jittered:
         for size, u in solved_levels(path, args.case):
@@ -72,8 +80,9 @@ def main():
     peak = max(np.linalg.norm(levels[-1][1], axis=1))
 
     print(f"{args.case}: {len(h)} levels, peak sample displacement {peak:.4f} mm")
-    print("| jittered study | its level | the study's level | RMS distance | each sample's distance [um] |")
-    print("|---|---|---|---|---|")
+    if distances:
+        print("| jittered study | its level | the study's level | RMS distance | each sample's distance [um] |")
+        print("|---|---|---|---|---|")
     for path, size, level, d in distances:
         each = ", ".join(f"{x * 1e3:.1f}" for x in np.linalg.norm(d, axis=1))
         print(f"| {path} | {size:g} mm | {level:g} mm | {rms(d) * 1e3:.2f} um ({rms(d) / peak * 100:.3f} %) | {each} |")

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
@@ -358,6 +359,38 @@ TEST(Cli, VerifyFemWithOneCantileverLevelHasNoRate) {
   // P2 on one element through the depth (282 DOFs, direct solve): measured 3.8845e-3 against Timoshenko.
   EXPECT_NEAR(cantilever["levels"][0]["relative_l2_error"].get<double>(), 3.8845e-3, 1e-6);
   fs::remove_all(out);
+}
+
+// `verify fem --meshes-per-level`: each level is the mean of meshes at h (1 + jitter k), and their spread is the
+// mesh-to-mesh noise that one mesh per level hides (docs/FEM_REFERENCE.md, "Mesh-to-mesh noise").
+TEST(Cli, VerifyFemAveragesSeveralMeshesPerLevelAndReportsTheirSpread) {
+  const fs::path out = fs::temp_directory_path() / ("tissue_verify_meshes_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  const RunResult r = run("verify fem --config " + kConfigDir + "/ci/lung_small_ci.json --sizes 30 --meshes-per-level 2 "
+                          "--cantilever-levels 1 --out " + out.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("Mesh-to-mesh noise"), std::string::npos) << r.output;
+  const json level = json::parse(std::ifstream(out / "fem.json"))["mesh_convergence"]["lung_small_ci"]["levels"][0];
+  ASSERT_EQ(level["meshes"].size(), 2u);
+  EXPECT_DOUBLE_EQ(level["meshes"][0]["mesh_size_mm"].get<double>(), 30.0);
+  EXPECT_DOUBLE_EQ(level["meshes"][1]["mesh_size_mm"].get<double>(), 30.3);
+  // The level's samples are the meshes' mean, and the noise their RMS distance from it over the samples (n - 1 = 1).
+  double sum = 0.0;
+  const std::size_t n = level["sample_displacements_mm"].size();
+  for (std::size_t i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      const double a = level["meshes"][0]["sample_displacements_mm"][i][k].get<double>();
+      const double b = level["meshes"][1]["sample_displacements_mm"][i][k].get<double>();
+      EXPECT_NEAR(level["sample_displacements_mm"][i][k].get<double>(), 0.5 * (a + b), 1e-12);
+      sum += 2 * 0.25 * (a - b) * (a - b);
+    }
+  EXPECT_NEAR(level["mesh_noise_mm"].get<double>(), std::sqrt(sum / static_cast<double>(n)), 1e-12);
+  // Measured 0.02953 mm between the 30 and 30.3 mm meshes.
+  EXPECT_NEAR(level["mesh_noise_mm"].get<double>(), 0.02953, 0.003);
+  fs::remove_all(out);
+  const RunResult bad = run("verify fem --skip-lung --meshes-per-level 0");
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.output.find("--meshes-per-level"), std::string::npos) << bad.output;
 }
 
 TEST(Cli, HelpOnEverySubcommand) {

@@ -4,6 +4,7 @@
 
 #include <fmt/format.h>
 
+#include <cmath>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -34,7 +35,22 @@ struct VerifyFemOptions {
   std::vector<int> cantilever_levels{1, 2, 4, 8};
   double converged_change = 0.01;  ///< relative change of the sample displacements at the next level
   bool skip_lung = false;
+  /// Meshes per level, at h (1 + jitter k), k = 0, +1, -1, +2, ...: Gmsh's levels are not nested, so each mesh's
+  /// samples carry a part that depends on that mesh, which the observed order inherits; the level's samples are
+  /// the meshes' mean, and the spread is reported (docs/FEM_REFERENCE.md, "Mesh-to-mesh noise").
+  int meshes_per_level = 1;
+  double jitter = 0.01;
 };
+
+/// The mesh sizes [mm] of the level of nominal size h: h (1 + jitter k), k = 0, +1, -1, +2, -2, ...
+std::vector<double> level_mesh_sizes(double h, const VerifyFemOptions& opt) {
+  std::vector<double> sizes;
+  for (int m = 0; m < opt.meshes_per_level; ++m) {
+    const int k = (m + 1) / 2 * (m % 2 == 1 ? 1 : -1);
+    sizes.push_back(std::round(h * (1.0 + opt.jitter * k) * 1e6) / 1e6);  // to the nm, so that it prints as given
+  }
+  return sizes;
+}
 
 core::KelvinParameters bar_material(double nu) {
   core::KelvinParameters p;
@@ -129,8 +145,13 @@ nlohmann::json rows_in_mm(const Eigen::MatrixXd& m) {
 /// One mesh level of one case.
 struct LungLevel {
   double h_mm = 0.0;
-  reference_fem::FemRunResult run;
-  std::string error;  ///< non-empty when the solve failed (e.g. Newton did not converge)
+  reference_fem::FemRunResult run;  ///< on the mesh of size h itself
+  std::string error;  ///< non-empty when a solve failed (e.g. Newton did not converge)
+  /// Each mesh's size [mm] and samples [m] (the first is h's); `samples` is their mean, what the study uses.
+  std::vector<double> mesh_sizes_mm;
+  std::vector<Eigen::MatrixXd> mesh_samples;
+  Eigen::MatrixXd samples;
+  double seconds = 0.0;  ///< over the level's meshes
   /// Where the samples lie, for their grouping by the refined ball (the same at every level: they are chosen on
   /// the reference surface) [m].
   core::PointMatrix sample_points;
@@ -144,26 +165,42 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
                                                        Progress* progress) {
   std::vector<std::vector<LungLevel>> levels(cases.size());
   for (double h : opt.sizes_mm) {
-    std::vector<core::Geometry> geometries;
-    for (const auto& c : cases) {
-      progress->step(fmt::format("{}: mesh size {} mm", c.name, h));
-      core::GeometryOptions g_options;
-      g_options.fem_mesh_size = h * 1e-3;
-      g_options.build_node_cloud = false;
-      geometries.push_back(core::build_geometry(c, g_options));
-    }
-    for (std::size_t i = 0; i < cases.size(); ++i) {
-      try {
-        levels[i].push_back({h, reference_fem::run_case(cases[i], geometries[i]), "", geometries[i].sample_points,
-                             geometries[i].load_centre});
-      } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
-        levels[i].push_back({h, {}, e.what(), geometries[i].sample_points, geometries[i].load_centre});
-        std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, h, e.what());
-        continue;
+    for (auto& case_levels : levels) case_levels.push_back(LungLevel{h});
+    for (const double size : level_mesh_sizes(h, opt)) {
+      std::vector<core::Geometry> geometries;
+      for (const auto& c : cases) {
+        progress->step(fmt::format("{}: mesh size {} mm", c.name, size));
+        core::GeometryOptions g_options;
+        g_options.fem_mesh_size = size * 1e-3;
+        g_options.build_node_cloud = false;
+        geometries.push_back(core::build_geometry(c, g_options));
       }
-      const auto& r = levels[i].back().run;
-      std::cerr << fmt::format("  {} at {} mm: {} DOFs, max sample |u| {:.4f} mm, {:.1f} s\n", cases[i].name, h,
-                               r.n_dofs, r.sample_displacements.rowwise().norm().maxCoeff() * 1e3, r.total_seconds);
+      for (std::size_t i = 0; i < cases.size(); ++i) {
+        LungLevel& level = levels[i].back();
+        if (level.mesh_sizes_mm.empty()) {
+          level.sample_points = geometries[i].sample_points;
+          level.load_centre = geometries[i].load_centre;
+        }
+        if (!level.error.empty()) continue;  // a mesh of this level failed: the level has no mean
+        try {
+          reference_fem::FemRunResult r = reference_fem::run_case(cases[i], geometries[i]);
+          std::cerr << fmt::format("  {} at {} mm: {} DOFs, max sample |u| {:.4f} mm, {:.1f} s\n", cases[i].name, size,
+                                   r.n_dofs, r.sample_displacements.rowwise().norm().maxCoeff() * 1e3, r.total_seconds);
+          level.mesh_sizes_mm.push_back(size);
+          level.mesh_samples.push_back(r.sample_displacements);
+          level.seconds += r.total_seconds;
+          if (level.mesh_sizes_mm.size() == 1) level.run = std::move(r);
+        } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
+          level.error = level_mesh_sizes(h, opt).size() > 1 ? fmt::format("at {} mm: {}", size, e.what()) : e.what();
+          std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, size, e.what());
+        }
+      }
+    }
+    for (auto& case_levels : levels) {
+      LungLevel& level = case_levels.back();
+      if (!level.error.empty()) continue;
+      level.samples = Eigen::MatrixXd::Zero(level.mesh_samples.front().rows(), 3);
+      for (const auto& u : level.mesh_samples) level.samples += u / static_cast<double>(level.mesh_samples.size());
     }
   }
   return levels;
@@ -206,6 +243,7 @@ nlohmann::json orders_by_zone(const core::Case& c, const LungLevel& level, const
 nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& config, const core::Case& c,
                               const std::vector<LungLevel>& levels, std::string* md) {
   std::vector<Eigen::MatrixXd> u;
+  std::vector<std::string> noise_lines;
   nlohmann::json rows = nlohmann::json::array();
   *md += fmt::format("## Mesh convergence: {} (degree {})\n\n| mesh size [mm] | tets | DOFs | Newton its | crack faces | "
                      "max sample |u| [mm] | change to previous level | probe strain mean / peak | support-edge strain mean / peak "
@@ -220,17 +258,16 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
       continue;
     }
     const reference_fem::FemRunResult& r = level.run;
-    u.push_back(r.sample_displacements);
+    u.push_back(level.samples);
     int its = 0;
     for (const auto& s : r.steps) its += s.newton_iterations;
     std::optional<double> change;
     if (u.size() > 1) change = (u[u.size() - 1] - u[u.size() - 2]).norm() / u.back().norm();
     *md += fmt::format("| {} | {} | {} | {} | {} | {:.4f} | {} | {:.1f} % / {:.1f} % | {:.2f} % / {:.2f} % | {:.1f} |\n",
-                       h, r.n_cells, r.n_dofs, its, r.crack_faces,
-                       r.sample_displacements.rowwise().norm().maxCoeff() * 1e3,
+                       h, r.n_cells, r.n_dofs, its, r.crack_faces, level.samples.rowwise().norm().maxCoeff() * 1e3,
                        change ? fmt::format("{:.2f} %", *change * 100) : "", r.probe_strain.mean * 100,
                        r.probe_strain.peak * 100, r.support_edge_strain.mean * 100, r.support_edge_strain.peak * 100,
-                       r.total_seconds);
+                       level.seconds);
     rows.push_back({{"mesh_size_mm", h},
                     {"n_cells", r.n_cells},
                     {"n_dofs", r.n_dofs},
@@ -241,10 +278,30 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
                     {"support_edge_strain_mean", r.support_edge_strain.mean},
                     {"support_edge_strain_peak", r.support_edge_strain.peak},
                     {"support_edge_band_mm", reference_fem::kSupportEdgeBand * 1e3},
-                    {"seconds", r.total_seconds},
-                    {"sample_displacements_mm", rows_in_mm(r.sample_displacements)},
+                    {"seconds", level.seconds},
+                    {"sample_displacements_mm", rows_in_mm(level.samples)},
                     {"relative_change_to_previous", change ? nlohmann::json(*change) : nlohmann::json()}});
+    if (level.mesh_samples.size() > 1) {
+      // The spread of the meshes about their mean: RMS over the samples of each mesh's distance, with n - 1.
+      double sum = 0.0;
+      nlohmann::json meshes = nlohmann::json::array();
+      for (std::size_t m = 0; m < level.mesh_samples.size(); ++m) {
+        sum += (level.mesh_samples[m] - level.samples).rowwise().squaredNorm().mean();
+        meshes.push_back({{"mesh_size_mm", level.mesh_sizes_mm[m]},
+                          {"sample_displacements_mm", rows_in_mm(level.mesh_samples[m])}});
+      }
+      const double noise = std::sqrt(sum / static_cast<double>(level.mesh_samples.size() - 1));
+      rows.back()["meshes"] = meshes;
+      rows.back()["mesh_noise_mm"] = noise * 1e3;
+      noise_lines.push_back(fmt::format("{} mm: {:.2f} µm ({:.3f} % of the largest sample)", h, noise * 1e6,
+                                        100 * noise / level.samples.rowwise().norm().maxCoeff()));
+    }
   }
+  if (!noise_lines.empty())
+    *md += fmt::format("\nEach level is the mean of {} meshes at h (1 + {:g} k), k = 0, +1, -1, ...; the table's mesh, "
+                       "DOFs and strains are those of h itself, its time the meshes' total. Mesh-to-mesh noise (RMS "
+                       "over the samples of each mesh's distance from the mean): {}.\n",
+                       opt.meshes_per_level, opt.jitter, fmt::join(noise_lines, "; "));
   // Converged: the first level whose samples change by less than the threshold at the next level.
   nlohmann::json converged;
   bool all_solved = true;
@@ -289,7 +346,8 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
 }
 
 int run_verify_fem(const VerifyFemOptions& opt) {
-  const int lung_steps = opt.skip_lung ? 0 : static_cast<int>(opt.configs.size() * opt.sizes_mm.size());
+  const int lung_steps =
+      opt.skip_lung ? 0 : static_cast<int>(opt.configs.size() * opt.sizes_mm.size()) * opt.meshes_per_level;
   Progress progress("verify fem", 1 + static_cast<int>(opt.cantilever_levels.size()) + lung_steps);
   core::OutputDirectory out(opt.out);
   std::string md = "# FEM reference verification (`tissue verify fem`)\n\n";
@@ -340,6 +398,14 @@ void add_verify_commands(CLI::App& app) {
   fem->add_option("--cantilever-levels", opt.cantilever_levels, "Elements through the cantilever depth")
       ->capture_default_str();
   fem->add_flag("--skip-lung", opt.skip_lung, "Only the closed-form checks (fast)");
+  fem->add_option("--meshes-per-level", opt.meshes_per_level,
+                  "Meshes per level, at h (1 + jitter k), k = 0, +1, -1, ...; the level's samples are their mean and "
+                  "their spread is reported (the levels are not nested: docs/FEM_REFERENCE.md, \"Mesh-to-mesh noise\")")
+      ->check(CLI::Range(1, 9))
+      ->capture_default_str();
+  fem->add_option("--jitter", opt.jitter, "Relative size step between a level's meshes")
+      ->check(CLI::Range(0.001, 0.05))
+      ->capture_default_str();
   fem->callback([] { throw CommandResult{run_verify_fem(opt)}; });
 
   auto* efg = group->add_subcommand("meshless",
