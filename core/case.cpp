@@ -58,6 +58,7 @@ KelvinParameters read_material(const JsonReader& r) {
   m.eta = r.positive("eta");
   m.nu = r.in_range("nu", -1.0, 0.5, false, false);
   m.k = r.in_range("k", -1e3, 1e3, true, true, 0.0);
+  m.slope_floor = r.in_range("slope_floor", 0.0, 1.0, true, false, 0.0);  // docs/MATERIAL.md §1.7
   r.finish();
   return m;
 }

@@ -24,7 +24,8 @@ std::string describe(const std::string& model, double time, const Eigen::Vector3
       "(/load/force), lower |k| (/material/k), or spread the force over a larger patch (/load/radius); a "
       "pointed "
       "or thin part of the surface under the probe concentrates the strain (docs/MATERIAL.md, admissible "
-      "range)",
+      "range). Where the strain concentrates at a singular line that refinement resolves (a crack's front, a "
+      "clamp's edge), /material/slope_floor continues the law past its limit instead (docs/MATERIAL.md §1.7)",
       model, time, mm.x(), mm.y(), mm.z(), k, k > 0.0 ? "smallest" : "largest", principal, limit, margin,
       strain[0], strain[1], strain[2], strain[3], strain[4], strain[5]);
 }

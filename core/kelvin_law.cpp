@@ -19,6 +19,7 @@
 #include "core/kelvin_law.hpp"
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -64,6 +65,9 @@ KelvinLaw::KelvinLaw(const KelvinParameters& parameters) : parameters_(parameter
   if (!std::isfinite(parameters_.k)) {
     throw std::invalid_argument(describe("k must be finite", parameters_.k));
   }
+  if (!(parameters_.slope_floor >= 0.0 && parameters_.slope_floor < 1.0)) {
+    throw std::invalid_argument(describe("slope_floor must satisfy 0 <= slope_floor < 1", parameters_.slope_floor));
+  }
   C0_ = elastic_matrix(parameters_.K1);
 }
 
@@ -80,6 +84,16 @@ Matrix6 KelvinLaw::elastic_matrix(double youngs_modulus) const {
 }
 
 Vector6 KelvinLaw::adjusted_strain(const Vector6& strain) const {
+  if (past_floor(strain)) {
+    // The slope floor (§1.7): N is the isotropic tensor function with the 1-D function n of each principal
+    // strain, N = sum_i n(lambda_i) v_i v_i^T. Inside the floor n(lambda) = lambda + k lambda^2 and this is
+    // exactly eps + k eps.eps, so the switch is continuous; it is taken only past the floor, and the paper's
+    // polynomial below stays the law everywhere else, bit for bit.
+    const Eigen::SelfAdjointEigenSolver<Matrix3> eigen(voigt_to_strain(strain));
+    const Eigen::Vector3d lambda = eigen.eigenvalues();
+    const Eigen::Vector3d n(floored_n(lambda[0]), floored_n(lambda[1]), floored_n(lambda[2]));
+    return strain_to_voigt(eigen.eigenvectors() * n.asDiagonal() * eigen.eigenvectors().transpose());
+  }
   // Tensor form N = eps + k eps.eps (the 3-D reading of the 1-D N = eps + k eps^2 in eq. 10). It is an
   // isotropic tensor function, so N(R eps R^T) = R N(eps) R^T: the law is frame-indifferent. A
   // component-wise square of the Voigt vector would not be (and would mix engineering factors of 2).
@@ -93,6 +107,25 @@ Matrix6 KelvinLaw::adjusted_strain_jacobian(const Vector6& strain) const {
   // that expression for de = voigt_to_strain(unit vector j). Going through voigt_to_strain handles the
   // halving of engineering shear on input and strain_to_voigt the doubling on output, which is the
   // easy thing to get wrong when writing this 6x6 matrix by hand.
+  if (past_floor(strain)) {
+    // The derivative of an isotropic tensor function (Daleckii-Krein): in the principal frame the (i, j)
+    // component of d eps is scaled by n'(lambda_i) when i = j and by the divided difference
+    // (n(lambda_i) - n(lambda_j)) / (lambda_i - lambda_j) when i != j. With the paper's polynomial these are
+    // 1 + 2k lambda_i and 1 + k (lambda_i + lambda_j), the factors of §1.5, so both forms agree inside the floor.
+    const Eigen::SelfAdjointEigenSolver<Matrix3> eigen(voigt_to_strain(strain));
+    const Eigen::Vector3d lambda = eigen.eigenvalues();
+    const Matrix3& v = eigen.eigenvectors();
+    Matrix3 factor;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        factor(a, b) = a == b ? floored_slope(lambda[a]) : floored_divided_difference(lambda[a], lambda[b]);
+    Matrix6 jacobian;
+    for (int j = 0; j < 6; ++j) {
+      const Matrix3 de = v.transpose() * voigt_to_strain(Vector6::Unit(j)) * v;
+      jacobian.col(j) = strain_to_voigt(v * factor.cwiseProduct(de) * v.transpose());
+    }
+    return jacobian;
+  }
   const Matrix3 e = voigt_to_strain(strain);
   const double k = parameters_.k;
   Matrix6 jacobian;
@@ -122,6 +155,43 @@ double KelvinLaw::admissibility_margin(const Vector6& strain) const {
 double KelvinLaw::limit_strain() const {
   const double k = parameters_.k;
   return k == 0.0 ? std::numeric_limits<double>::infinity() : -1.0 / (2.0 * k);
+}
+
+double KelvinLaw::floor_strain() const {
+  const double k = parameters_.k, delta = parameters_.slope_floor;
+  return k == 0.0 || delta == 0.0 ? std::numeric_limits<double>::infinity() : (delta - 1.0) / (2.0 * k);
+}
+
+bool KelvinLaw::past_floor(const Vector6& strain) const {
+  const double k = parameters_.k;
+  if (k == 0.0 || parameters_.slope_floor == 0.0) return false;
+  const Eigen::Vector3d lambda = principal_strains(strain);
+  return 1.0 + 2.0 * k * (k > 0.0 ? lambda.minCoeff() : lambda.maxCoeff()) < parameters_.slope_floor;
+}
+
+// n(lambda) = lambda + k lambda^2 while its slope 1 + 2k lambda is >= delta; past lambda_c = (delta - 1)/(2k)
+// the tangent line at lambda_c, n(lambda_c) + delta (lambda - lambda_c). n is continuous with its slope, so
+// Newton sees no kink in the stress, only in its derivative.
+double KelvinLaw::floored_n(double lambda) const {
+  const double k = parameters_.k, delta = parameters_.slope_floor;
+  if (1.0 + 2.0 * k * lambda >= delta) return lambda + k * lambda * lambda;
+  const double c = floor_strain();
+  return c + k * c * c + delta * (lambda - c);
+}
+
+double KelvinLaw::floored_slope(double lambda) const {
+  return std::max(parameters_.slope_floor, 1.0 + 2.0 * parameters_.k * lambda);
+}
+
+double KelvinLaw::floored_divided_difference(double a, double b) const {
+  const double k = parameters_.k, delta = parameters_.slope_floor;
+  const bool a_inside = 1.0 + 2.0 * k * a >= delta, b_inside = 1.0 + 2.0 * k * b >= delta;
+  if (a_inside && b_inside) return 1.0 + k * (a + b);  // exact, no cancellation
+  if (!a_inside && !b_inside) return delta;
+  // One on each side of lambda_c: the quotient is well conditioned unless a and b nearly coincide, where the
+  // slope (continuous, equal to delta at lambda_c) is the limit.
+  if (std::abs(a - b) <= 1e-12 * std::max({1.0, std::abs(a), std::abs(b)})) return floored_slope(0.5 * (a + b));
+  return (floored_n(a) - floored_n(b)) / (a - b);
 }
 
 double KelvinLaw::step_modulus_factor(double dt) const {

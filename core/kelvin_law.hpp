@@ -20,6 +20,11 @@ struct KelvinParameters {
   double eta = 0.0;  ///< damper viscosity [Pa s]
   double nu = 0.0;   ///< Poisson's ratio of the isotropic elastic tensor
   double k = 0.0;    ///< adjustment-function coefficient in N(eps) = eps + k eps^2 [-]
+  /// The smallest slope the adjustment function may reach, delta in [0, 1) (docs/MATERIAL.md §1.7). 0 is the
+  /// paper's law: its slope 1 + 2k lambda reaches 0 at the limit strain -1/(2k) and no equilibrium exists past
+  /// it. With delta > 0, N continues past the principal strain where its slope falls to delta as a straight line
+  /// of slope delta, so every strain is admissible; inside that strain the law is the paper's, bit for bit.
+  double slope_floor = 0.0;
 
   double relaxation_time() const { return eta / (K1 + K2); }             ///< tau
   double equilibrium_modulus() const { return K1 * K2 / (K1 + K2); }     ///< E_inf
@@ -66,6 +71,13 @@ class KelvinLaw {
   /// The principal strain at which the margin vanishes, -1/(2k): compressive for k > 0, tensile for k < 0,
   /// infinite for k = 0.
   double limit_strain() const;
+  /// Whether a strain with this margin has an equilibrium under this law: a margin > 0, or any margin when the
+  /// slope floor continues N past its limit (then the margin still reports the paper's 1 + 2k lambda, so that a
+  /// margin below the floor shows where the continuation acted).
+  bool admits(double margin) const { return margin > 0.0 || parameters_.slope_floor > 0.0; }
+  /// The principal strain past which the slope floor continues N linearly, (delta - 1)/(2k); infinite when
+  /// k = 0 or the floor is 0 (the paper's law everywhere).
+  double floor_strain() const;
 
   /// Effective step modulus factor: g_inf + (1-g_inf) (tau/dt)(1 - exp(-dt/tau)).  dt = 0 -> 1.
   double step_modulus_factor(double dt) const;
@@ -82,6 +94,14 @@ class KelvinLaw {
                          KelvinState* new_state = nullptr) const;
 
  private:
+  /// True when a principal strain lies past floor_strain(), where N is evaluated in the principal frame.
+  bool past_floor(const Vector6& strain) const;
+  /// The 1-D adjustment function with the slope floor, its slope, and the divided difference
+  /// (n(a) - n(b)) / (a - b) (the slope at a = b): the factors of the principal-frame form of N and dN/deps.
+  double floored_n(double lambda) const;
+  double floored_slope(double lambda) const;
+  double floored_divided_difference(double a, double b) const;
+
   KelvinParameters parameters_;
   Matrix6 C0_;  // elastic_matrix(K1)
 };

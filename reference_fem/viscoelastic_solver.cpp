@@ -575,7 +575,7 @@ core::NewtonAttempt ViscoelasticSolver::newton_iterations(double t_new, const Tr
 }
 
 std::shared_ptr<const core::InadmissibleStrain> ViscoelasticSolver::inadmissible_iterate(double t_new) const {
-  if (iterate_margin_.margin > 0.0) return nullptr;
+  if (law_.admits(iterate_margin_.margin)) return nullptr;
   return std::make_shared<const core::InadmissibleStrain>("FEM reference", t_new, iterate_margin_.point,
                                                           iterate_margin_.strain, law_);
 }

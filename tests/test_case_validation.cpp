@@ -100,6 +100,11 @@ TEST_F(BadCase, NegativeModulus) {
   expect_error(write_case(base_), {"/material/K1", "expected a number > 0", "-6000"});
 }
 
+TEST_F(BadCase, SlopeFloorOutsideZeroToOne) {
+  base_["material"]["slope_floor"] = 1.0;
+  expect_error(write_case(base_), {"/material/slope_floor", "[0, 1)", "1"});
+}
+
 TEST_F(BadCase, PoissonRatioAtLeastHalf) {
   base_["material"]["nu"] = 0.5;
   expect_error(write_case(base_), {"/material/nu", "(-1, 0.5)", "0.5"});

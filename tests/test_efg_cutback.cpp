@@ -154,5 +154,25 @@ TEST(EfgCutback, CompressionBeyondTheLawsLimitStopsWithTheAdmissibilityError) {
   }
 }
 
+TEST(EfgCutback, SlopeFloorCarriesTheCompressionPastTheLimitAlongTheClosedForm) {
+  // The same 2000 Pa at once, with /material/slope_floor = 0.2 (docs/MATERIAL.md §1.7): K1 n(eps) = -2000 Pa,
+  // n(eps) = -1/3 lies past n(lambda_c) = -0.24 (lambda_c = -0.4), so eps = -0.4 + (-1/3 + 0.24)/0.2 = -13/15.
+  // The MLS functions reproduce the uniform state and the penalty only shifts it, so the bar's strain between
+  // its ends is exact to the Newton tolerance.
+  EfgProblem p = compressed_bar(2000.0, 1, 1.0);
+  p.step_times = {0.0};
+  p.load_scale = [](double) { return 1.0; };
+  p.min_step = 0.01;
+  p.material.slope_floor = 0.2;
+  EfgModel model(std::move(p));
+  model.run();
+  const Eigen::Vector3d mid(0.0, kWidth / 2, kWidth / 2);
+  const double strain =
+      (model.displacement_at(mid + Eigen::Vector3d(kLength, 0, 0)).x() - model.displacement_at(mid).x()) / kLength;
+  std::cout << "strain " << strain << ", smallest margin " << model.steps().back().admissibility_margin << "\n";
+  EXPECT_NEAR(strain, -13.0 / 15.0, 1e-7);
+  EXPECT_NEAR(model.steps().back().admissibility_margin, 1.0 + 2.0 * strain, 1e-6);
+}
+
 }  // namespace
 }  // namespace meshless

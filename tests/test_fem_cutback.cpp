@@ -200,5 +200,21 @@ TEST(FemCutback, CompressionBeyondTheLawsLimitStopsWithTheAdmissibilityError) {
   }
 }
 
+TEST(FemCutback, SlopeFloorCarriesTheCompressionPastTheLimitAlongTheClosedForm) {
+  // The same 2000 Pa at once, with /material/slope_floor = 0.2 (docs/MATERIAL.md §1.7): K1 n(eps) = -2000 Pa,
+  // n(eps) = -1/3 lies past n(lambda_c) = -0.24 (lambda_c = -0.4), so eps = -0.4 + (-1/3 + 0.24)/0.2 = -13/15.
+  // P1 reproduces the uniform uniaxial state, so the tip moves by eps L to the Newton tolerance.
+  SolverParameters p = bar_parameters(25, 0.01);
+  p.material.slope_floor = 0.2;
+  BoundaryConditions bc = compression(2000.0, /*ramp=*/false);
+  const FemRunResult r = solve_on_mesh(bar_mesh(), p, bc, {0.0}, kTip);
+  const double strain = r.sample_displacements(0, 0) / kLength;
+  std::cout << "strain " << strain << " after " << r.steps[0].newton_iterations << " Newton iterations, margin "
+            << r.smallest_margin.margin << "\n";
+  EXPECT_NEAR(strain, -13.0 / 15.0, 1e-8);
+  EXPECT_NEAR(r.smallest_margin.margin, 1.0 + 2.0 * strain, 1e-7);  // the paper's margin, past its limit
+  EXPECT_LE(r.steps[0].newton_iterations, 8);
+}
+
 }  // namespace
 }  // namespace reference_fem

@@ -474,6 +474,134 @@ TEST(KelvinLaw, AdmissibleRangeMatchesThePaperOneDimensionalForm) {
   EXPECT_EQ(KelvinLaw(make_parameters(0.3, 0.0)).admissibility_margin(uniaxial_strain(-5.0)), 1.0);
 }
 
+// ---------------------------------------------------------------------------------------------------
+// The slope floor (docs/MATERIAL.md §1.7): past the principal strain where the slope 1 + 2k lambda of N falls to
+// delta, N continues along its tangent line there, with slope delta.
+
+KelvinParameters with_floor(double nu, double k, double delta) {
+  KelvinParameters p = make_parameters(nu, k);
+  p.slope_floor = delta;
+  return p;
+}
+
+TEST(KelvinLaw, SlopeFloorLeavesThePapersLawUntouchedInsideTheFloor) {
+  // k = 1, delta = 0.1: the floor is at lambda = -0.45, far beyond strains of +-0.1, so every number is the
+  // paper's law's, bit for bit (the shipped cases' results do not move when a floor is set and not reached).
+  const KelvinLaw paper(make_parameters(0.3, 1.0)), floored(with_floor(0.3, 1.0, 0.1));
+  EXPECT_DOUBLE_EQ(floored.floor_strain(), -0.45);
+  EXPECT_TRUE(std::isinf(paper.floor_strain()));
+  std::mt19937 rng(5);
+  KelvinState old_state;
+  old_state.strain = random_strain(rng, 0.1);
+  old_state.viscous_stress = 100.0 * random_strain(rng, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const Vector6 e = random_strain(rng, 0.1);
+    EXPECT_EQ(floored.adjusted_strain(e), paper.adjusted_strain(e));
+    EXPECT_EQ(floored.adjusted_strain_jacobian(e), paper.adjusted_strain_jacobian(e));
+    const KelvinResponse a = paper.update(old_state, e, 0.05), b = floored.update(old_state, e, 0.05);
+    EXPECT_EQ(a.stress, b.stress);
+    EXPECT_EQ(a.tangent, b.tangent);
+    EXPECT_EQ(floored.admissibility_margin(e), paper.admissibility_margin(e));
+  }
+}
+
+TEST(KelvinLaw, SlopeFloorContinuesTheOneDimensionalLawAlongItsTangent) {
+  // nu = 0, uniaxial strain, dt = 0: sigma_xx = K1 n(eps) with n(eps) = eps + k eps^2 down to
+  // lambda_c = (delta - 1)/(2k), and n(lambda_c) + delta (eps - lambda_c) past it; the tangent is K1 max(delta,
+  // 1 + 2k eps). k = 1, delta = 0.2: lambda_c = -0.4, n(lambda_c) = -0.24.
+  const double k1 = 2.0e3;
+  const KelvinLaw law(with_floor(0.0, 1.0, 0.2));
+  const auto n = [](double eps) { return eps >= -0.4 ? eps + eps * eps : -0.24 + 0.2 * (eps + 0.4); };
+  double previous = std::numeric_limits<double>::infinity();
+  for (double eps : {0.1, -0.2, -0.39, -0.4, -0.41, -0.5, -0.8, -2.0}) {
+    const KelvinResponse r = law.update(KelvinState{}, uniaxial_strain(eps), 0.0);
+    EXPECT_NEAR(r.stress(0) / k1, n(eps), 1e-14) << eps;
+    EXPECT_NEAR(r.tangent(0, 0) / k1, std::max(0.2, 1.0 + 2.0 * eps), 1e-14) << eps;
+    EXPECT_NEAR(r.stress(1), 0.0, 1e-12) << eps;  // nu = 0 and n(0) = 0: no lateral stress
+    EXPECT_LT(r.stress(0), previous) << "the stress keeps falling as the strain does: " << eps;
+    previous = r.stress(0);
+  }
+  // Continuous with its slope at lambda_c.
+  for (double side : {-1.0, 1.0}) {
+    const double eps = -0.4 + side * 1e-9;
+    EXPECT_NEAR(law.adjusted_strain(uniaxial_strain(eps))(0), -0.24 + 0.2 * side * 1e-9, 1e-15);
+  }
+  // k < 0: the floor lies in tension. k = -2, delta = 0.2: lambda_c = 0.2, n(lambda_c) = 0.12.
+  const KelvinLaw tensile(with_floor(0.0, -2.0, 0.2));
+  EXPECT_DOUBLE_EQ(tensile.floor_strain(), 0.2);
+  EXPECT_NEAR(tensile.adjusted_strain(uniaxial_strain(0.3))(0), 0.12 + 0.2 * 0.1, 1e-15);
+  EXPECT_NEAR(tensile.adjusted_strain(uniaxial_strain(-0.3))(0), -0.3 - 2.0 * 0.09, 1e-15);
+}
+
+TEST(KelvinLaw, SlopeFloorJacobianMatchesFiniteDifferences) {
+  // Strains with one, two and three principal strains past the floor (k = 1, delta = 0.1: lambda_c = -0.45),
+  // with a pair that straddles it and with a repeated pair, and a tensile floor (k = -1.5).
+  const KelvinLaw law(with_floor(0.3, 1.0, 0.1)), tensile(with_floor(0.3, -1.5, 0.1));
+  std::mt19937 rng(3);
+  std::vector<std::pair<const KelvinLaw*, Vector6>> cases;
+  for (double shift : {-0.3, -0.5, -0.7}) {
+    for (int trial = 0; trial < 4; ++trial) {
+      Vector6 e = random_strain(rng, 0.3);
+      e.head<3>().array() += shift;
+      cases.emplace_back(&law, e);
+    }
+  }
+  cases.emplace_back(&law, (Vector6() << -0.6, -0.6, 0.1, 0.0, 0.0, 0.0).finished());   // repeated, past
+  cases.emplace_back(&law, (Vector6() << -0.46, -0.44, 0.0, 0.0, 0.0, 0.0).finished());  // straddling
+  for (int trial = 0; trial < 4; ++trial) {
+    Vector6 e = random_strain(rng, 0.3);
+    e.head<3>().array() += 0.4;
+    cases.emplace_back(&tensile, e);
+  }
+  int past = 0;
+  for (const auto& [l, e] : cases) {
+    const bool beyond = (l->parameters().k > 0 ? KelvinLaw::principal_strains(e).minCoeff() < l->floor_strain()
+                                               : KelvinLaw::principal_strains(e).maxCoeff() > l->floor_strain());
+    past += beyond;
+    const Matrix6 jacobian = l->adjusted_strain_jacobian(e);
+    const double h = 1e-7;
+    Matrix6 fd;
+    for (int j = 0; j < 6; ++j) {
+      const Vector6 dh = h * Vector6::Unit(j);
+      fd.col(j) = (l->adjusted_strain(e + dh) - l->adjusted_strain(e - dh)) / (2.0 * h);
+    }
+    EXPECT_LT((jacobian - fd).norm() / jacobian.norm(), 1e-7) << e.transpose() << "\nanalytic\n"
+                                                              << jacobian << "\nfd\n" << fd;
+    // N stays monotone: every eigenvalue of dN/deps is at least delta.
+    const Eigen::VectorXcd ev = Eigen::EigenSolver<Matrix6>(jacobian).eigenvalues();
+    EXPECT_GT(ev.real().minCoeff(), 0.1 - 1e-10) << e.transpose();
+  }
+  EXPECT_GE(past, 14) << "most cases must lie past the floor, or the test checks the paper's form only";
+}
+
+TEST(KelvinLaw, SlopeFloorIsFrameIndifferentAndAdmitsEveryStrain) {
+  const KelvinLaw law(with_floor(0.3, 1.0, 0.1)), paper(make_parameters(0.3, 1.0));
+  std::mt19937 rng(13);
+  Vector6 strain = random_strain(rng, 0.3);
+  strain.head<3>().array() -= 0.5;
+  ASSERT_LT(law.admissibility_margin(strain), 0.0) << "the strain must lie past the paper's limit";
+  const Matrix3 rotation =
+      Eigen::AngleAxisd(1.1, Eigen::Vector3d(-0.4, 0.9, 0.2).normalized()).toRotationMatrix();
+  const Matrix3 e = voigt_to_strain(strain);
+  const Matrix3 n = voigt_to_strain(law.adjusted_strain(strain));
+  const Matrix3 n_rot = voigt_to_strain(law.adjusted_strain(strain_to_voigt(rotation * e * rotation.transpose())));
+  EXPECT_LT((n_rot - rotation * n * rotation.transpose()).norm(), 1e-14);
+  // The margin still reports the paper's 1 + 2k lambda (where the continuation acted); admits() decides.
+  EXPECT_EQ(law.admissibility_margin(strain), paper.admissibility_margin(strain));
+  EXPECT_TRUE(law.admits(law.admissibility_margin(strain)));
+  EXPECT_FALSE(paper.admits(paper.admissibility_margin(strain)));
+  EXPECT_TRUE(paper.admits(0.3));
+  // The floor must be in [0, 1), and the message names it.
+  for (double bad : {-0.1, 1.0, std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      KelvinLaw l(with_floor(0.3, 1.0, bad));
+      FAIL() << "accepted slope_floor " << bad;
+    } catch (const std::invalid_argument& error) {
+      EXPECT_NE(std::string(error.what()).find("slope_floor"), std::string::npos) << error.what();
+    }
+  }
+}
+
 TEST(KelvinLaw, InadmissibleStrainNamesModelTimePointStrainAndRemedies) {
   const KelvinLaw law(make_parameters(0.3, 1.0));
   Vector6 e = Vector6::Zero();
@@ -487,7 +615,7 @@ TEST(KelvinLaw, InadmissibleStrainNamesModelTimePointStrainAndRemedies) {
   EXPECT_DOUBLE_EQ(error.limit_strain(), -0.5);
   EXPECT_DOUBLE_EQ(error.time(), 0.4);
   for (const char* part : {"FEM reference", "t = 0.4 s", "(256.40, 71.20, -323.50) mm", "-0.5000", "-0.5500",
-                           "/load/force", "/material/k", "/load/radius"})
+                           "/load/force", "/material/k", "/load/radius", "/material/slope_floor"})
     EXPECT_NE(message.find(part), std::string::npos) << part;
 }
 

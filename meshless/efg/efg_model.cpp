@@ -635,7 +635,7 @@ void EfgModel::update_material(double dt, bool with_tangent) {
 }
 
 std::shared_ptr<const core::InadmissibleStrain> EfgModel::inadmissible_iterate() const {
-  if (weakest_point_ < 0 || margins_[weakest_point_] > 0.0) return nullptr;
+  if (weakest_point_ < 0 || law_.admits(margins_[weakest_point_])) return nullptr;
   return std::make_shared<const core::InadmissibleStrain>(
       fmt::format("meshless (EFG) model '{}'", problem_.name), current_time_,
       volume_.points.row(weakest_point_).transpose(), strain_[weakest_point_], law_);
