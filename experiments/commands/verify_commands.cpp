@@ -191,7 +191,7 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
           level.seconds += r.total_seconds;
           if (level.mesh_sizes_mm.size() == 1) level.run = std::move(r);
         } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
-          level.error = level_mesh_sizes(h, opt).size() > 1 ? fmt::format("at {} mm: {}", size, e.what()) : e.what();
+          level.error = opt.meshes_per_level > 1 ? fmt::format("at {} mm: {}", size, e.what()) : e.what();
           std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, size, e.what());
         }
       }
@@ -279,6 +279,12 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
                     {"support_edge_strain_peak", r.support_edge_strain.peak},
                     {"support_edge_band_mm", reference_fem::kSupportEdgeBand * 1e3},
                     {"seconds", level.seconds},
+                    // The smallest 1 + 2k lambda of the converged states, and where: below the law's slope floor the
+                    // law was continued there (docs/MATERIAL.md §1.7).
+                    {"min_one_plus_2k_lambda", r.smallest_margin.margin},
+                    {"min_one_plus_2k_lambda_at_mm", std::vector<double>{r.smallest_margin.point.x() * 1e3,
+                                                                         r.smallest_margin.point.y() * 1e3,
+                                                                         r.smallest_margin.point.z() * 1e3}},
                     {"sample_displacements_mm", rows_in_mm(level.samples)},
                     {"relative_change_to_previous", change ? nlohmann::json(*change) : nlohmann::json()}});
     if (level.mesh_samples.size() > 1) {
@@ -296,6 +302,22 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
       noise_lines.push_back(fmt::format("{} mm: {:.2f} µm ({:.3f} % of the largest sample)", h, noise * 1e6,
                                         100 * noise / level.samples.rowwise().norm().maxCoeff()));
     }
+  }
+  if (c.material.k != 0.0) {
+    std::vector<std::string> margins;
+    for (const auto& level : levels)
+      if (level.error.empty())
+        margins.push_back(fmt::format("{} mm: {:.3f} at ({:.1f}, {:.1f}, {:.1f}) mm", level.h_mm,
+                                      level.run.smallest_margin.margin, level.run.smallest_margin.point.x() * 1e3,
+                                      level.run.smallest_margin.point.y() * 1e3,
+                                      level.run.smallest_margin.point.z() * 1e3));
+    const double floor = c.material.slope_floor;
+    *md += fmt::format("\nSmallest 1 + 2k lambda of the converged states (the law's margin, docs/MATERIAL.md §1.5): {}. "
+                       "{}\n",
+                       fmt::join(margins, "; "),
+                       floor > 0.0 ? fmt::format("The law's slope floor is {:g}: below it, the law was continued past "
+                                                 "the paper's range there (§1.7).", floor)
+                                   : "No slope floor: the paper's law throughout.");
   }
   if (!noise_lines.empty())
     *md += fmt::format("\nEach level is the mean of {} meshes at h (1 + {:g} k), k = 0, +1, -1, ...; the table's mesh, "

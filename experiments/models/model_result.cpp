@@ -88,11 +88,17 @@ nlohmann::json timings_json(const ModelResult& r) {
   return j;
 }
 
-nlohmann::json admissibility_json(const core::SmallestMargin& m, double k) {
+nlohmann::json admissibility_json(const core::SmallestMargin& m, const core::KelvinParameters& law) {
   const Eigen::Vector3d x = m.point * 1e3;
-  return {{"measure", "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
-                      "converged states (docs/MATERIAL.md); the strain must keep it > 0"},
+  const double k = law.k;
+  return {{"measure", law.slope_floor > 0.0
+                          ? "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
+                            "converged states (docs/MATERIAL.md); below slope_floor the law was continued past the "
+                            "paper's range there (§1.7)"
+                          : "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
+                            "converged states (docs/MATERIAL.md); the strain must keep it > 0"},
           {"min_one_plus_2k_lambda", m.margin},
+          {"slope_floor", law.slope_floor},
           {"k", k},
           {"limit_principal_strain", k == 0.0 ? nlohmann::json(nullptr) : nlohmann::json(-1.0 / (2.0 * k))},
           {"time", m.time},

@@ -62,7 +62,7 @@ void write_samples_csv(const std::string& path, const ModelResult& result);
 nlohmann::json timings_json(const ModelResult& result);
 void write_timings_json(const std::string& path, const ModelResult& result);
 /// The smallest 1 + 2k lambda of a run, where it occurred, and the limit strain -1/(2k) (details of timings.json).
-nlohmann::json admissibility_json(const core::SmallestMargin& smallest, double k);
+nlohmann::json admissibility_json(const core::SmallestMargin& smallest, const core::KelvinParameters& law);
 
 /// Write `text` to `path`, replacing it; throws std::runtime_error naming the file when it cannot be opened
 /// or when any byte fails to reach it (full disk, closed stream).

@@ -240,7 +240,7 @@ ModelResult run_meshless_steps(meshless::EfgModel& model, const core::Case& c, c
   r.details["available_memory_bytes"] = st.available_memory;
   r.details["nonlinear_solver"] =
       "Newton on the consistent tangent (core::KelvinLaw), reusing the factorised tangent while it contracts the residual";
-  r.details["law_admissibility"] = admissibility_json(model.smallest_margin(), c.material.k);
+  r.details["law_admissibility"] = admissibility_json(model.smallest_margin(), c.material);
   r.details["min_step_seconds"] = model.problem().min_step;
   if (model.problem().cut) {
     r.details["cut"] = {{"treatment", meshless::to_string(model.problem().cut_treatment)},

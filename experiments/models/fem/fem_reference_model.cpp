@@ -53,7 +53,7 @@ ModelResult fem_model_result(const core::Case& c, const core::Geometry& g, const
   r.details["probe_strain"] = {{"measure", "largest absolute principal strain within the load radius of the load centre"},
                                {"mean", f.probe_strain.mean},
                                {"peak", f.probe_strain.peak}};
-  r.details["law_admissibility"] = admissibility_json(f.smallest_margin, f.material_k);
+  r.details["law_admissibility"] = admissibility_json(f.smallest_margin, c.material);
   r.details["min_step_seconds"] = f.min_step;
   r.details["geometry_seconds"] = setup;
   r.details["timer_sections_seconds"] = f.sections;
