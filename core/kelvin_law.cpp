@@ -163,10 +163,9 @@ double KelvinLaw::floor_strain() const {
 }
 
 bool KelvinLaw::past_floor(const Vector6& strain) const {
-  const double k = parameters_.k;
-  if (k == 0.0 || parameters_.slope_floor == 0.0) return false;
-  const Eigen::Vector3d lambda = principal_strains(strain);
-  return 1.0 + 2.0 * k * (k > 0.0 ? lambda.minCoeff() : lambda.maxCoeff()) < parameters_.slope_floor;
+  // No floor (or k = 0, where the margin is 1): the paper's law, without computing an eigenvalue.
+  if (parameters_.k == 0.0 || parameters_.slope_floor == 0.0) return false;
+  return admissibility_margin(strain) < parameters_.slope_floor;
 }
 
 // n(lambda) = lambda + k lambda^2 while its slope 1 + 2k lambda is >= delta; past lambda_c = (delta - 1)/(2k)

@@ -91,12 +91,12 @@ nlohmann::json timings_json(const ModelResult& r) {
 nlohmann::json admissibility_json(const core::SmallestMargin& m, const core::KelvinParameters& law) {
   const Eigen::Vector3d x = m.point * 1e3;
   const double k = law.k;
-  return {{"measure", law.slope_floor > 0.0
-                          ? "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
-                            "converged states (docs/MATERIAL.md); below slope_floor the law was continued past the "
-                            "paper's range there (§1.7)"
-                          : "smallest 1 + 2k lambda over principal strains lambda and integration points, at the "
-                            "converged states (docs/MATERIAL.md); the strain must keep it > 0"},
+  const std::string measure =
+      "smallest 1 + 2k lambda over principal strains lambda and integration points, at the converged states "
+      "(docs/MATERIAL.md); ";
+  return {{"measure", measure + (law.slope_floor > 0.0
+                                     ? "below slope_floor the law was continued past the paper's range there (§1.7)"
+                                     : "the strain must keep it > 0")},
           {"min_one_plus_2k_lambda", m.margin},
           {"slope_floor", law.slope_floor},
           {"k", k},
