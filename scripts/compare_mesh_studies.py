@@ -11,25 +11,20 @@ per sample, the distance between the two extrapolations, each bar and their root
 Usage: scripts/compare_mesh_studies.py STUDY_A.json STUDY_B.json CASE [--order 2 3]
 """
 import argparse
-import json
 import math
 
 import numpy as np
 
+from mesh_study_io import ratio_ending_at, read_study, rms, solved
+
 
 def levels(path, case):
-    with open(path) as f:
-        study = json.load(f)["mesh_convergence"][case]
-    solved = [l for l in study["levels"] if "sample_displacements_mm" in l and "error" not in l]
-    return [np.array(l["sample_displacements_mm"]) for l in solved], [l["mesh_size_mm"] for l in solved]
-
-
-def rms(d):
-    return math.sqrt((d ** 2).sum() / d.shape[0])
+    levels = solved(read_study(path, case))
+    return [np.array(l["sample_displacements_mm"]) for l in levels], [l["mesh_size_mm"] for l in levels]
 
 
 def extrapolate(u, h, order):
-    r = 0.5 * (h[-3] / h[-2] + h[-2] / h[-1])
+    r = ratio_ending_at(h, len(h) - 1)
     step = (u[-1] - u[-2]) / (r ** order - 1.0)
     return u[-1] + step, rms(step)
 

@@ -23,36 +23,20 @@ Usage: scripts/mesh_noise.py STUDY.json CASE [JITTERED.json ...]
 """
 import argparse
 import itertools
-import json
 import math
 
 import numpy as np
 
+from mesh_study_io import observed_order as order, ratio_ending_at, read_study, rms, solved
+
 
 def solved_levels(path, case, with_meshes=False):
-    try:
-        with open(path) as f:
-            study = json.load(f)["mesh_convergence"][case]
-    except OSError as e:
-        raise SystemExit(f"{path}: cannot read it ({e.strerror}); expected the fem.json of `tissue verify fem`")
-    except (ValueError, KeyError):
-        raise SystemExit(f"{path}: no /mesh_convergence/{case} in it; expected the fem.json of `tissue verify fem` "
-                         f"run on that case")
-    solved = [l for l in study["levels"] if "sample_displacements_mm" in l and "error" not in l]
+    levels = solved(read_study(path, case))
     if with_meshes:  # each level's own meshes when `verify fem --meshes-per-level` made it, else its one mesh
         return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"]),
                  [np.array(m["sample_displacements_mm"]) for m in l.get("meshes", [])] or
-                 [np.array(l["sample_displacements_mm"])]) for l in solved]
-    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"])) for l in solved]
-
-
-def rms(d):
-    return math.sqrt((d ** 2).sum() / d.shape[0])
-
-
-def order(a, b, c, ratio):
-    d1, d2 = np.linalg.norm(b - a), np.linalg.norm(c - b)
-    return math.log(d1 / d2) / math.log(ratio) if d2 > 0 and d1 > d2 else 0.0
+                 [np.array(l["sample_displacements_mm"])]) for l in levels]
+    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"])) for l in levels]
 
 
 def main():
@@ -103,7 +87,7 @@ def main():
     print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means |")
     print("|---|---|---|---|")
     for l in range(2, len(h)):
-        ratio = 0.5 * (h[l - 2] / h[l - 1] + h[l - 1] / h[l])
+        ratio = ratio_ending_at(h, l)
         own = order(levels[l - 2][1], levels[l - 1][1], levels[l][1], ratio)
         combos = [order(a, b, c, ratio) for a, b, c in itertools.product(meshes[l - 2], meshes[l - 1], meshes[l])]
         means = [sum(g) / len(g) for g in meshes[l - 2:l + 1]]

@@ -30,17 +30,14 @@ import sys
 
 import numpy as np
 
+from mesh_study_io import observed_order, ratio_ending_at, solved
+
 FITS = [("h^2", [2]), ("h^3", [3]), ("h^2 + h^3", [2, 3])]
 
 
 def observed_orders(h, u):
-    """The observed order of each consecutive three levels, from the norms of the differences of `u` (levels by
-    values)."""
-    orders = []
-    for i in range(len(h) - 2):
-        ratio = 0.5 * (h[i] / h[i + 1] + h[i + 1] / h[i + 2])
-        orders.append(np.log(np.linalg.norm(u[i + 1] - u[i]) / np.linalg.norm(u[i + 2] - u[i + 1])) / np.log(ratio))
-    return orders
+    """The observed order of each consecutive three levels of `u` (levels by values)."""
+    return [observed_order(u[l - 2], u[l - 1], u[l], ratio_ending_at(h, l)) for l in range(2, len(h))]
 
 
 def samples_and_centre(config):
@@ -90,7 +87,7 @@ def main(path):
     with open(path) as f:
         studies = json.load(f)["mesh_convergence"]
     for case, study in studies.items():
-        levels = [level for level in study["levels"] if "sample_displacements_mm" in level and "error" not in level]
+        levels = solved(study)
         for level in study["levels"]:
             if level not in levels:
                 print(f"{case}: the {level['mesh_size_mm']:g} mm level did not solve; left out")
