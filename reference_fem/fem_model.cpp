@@ -63,7 +63,6 @@ FemRunResult solve_on_mesh(const core::TetMesh& mesh, const SolverParameters& pa
         solver.strain_where([&](const Eigen::Vector3d& x) { return std::abs(region.depth_inside(x)) <= kSupportEdgeBand; });
   }
   result.smallest_margin = solver.smallest_margin();
-  result.material_k = parameters.material.k;
   result.min_step = parameters.newton.min_step;
   result.sections = solver.section_seconds();
   dealii::Utilities::System::MemoryStats memory;

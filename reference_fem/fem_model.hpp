@@ -64,7 +64,6 @@ struct FemRunResult {
   /// where a clamp's strain is singular; an elastic support's stays bounded under refinement (docs/MATERIAL.md §3).
   BallStrain support_edge_strain;
   core::SmallestMargin smallest_margin;  ///< smallest 1 + 2k lambda over the converged steps, and where
-  double material_k = 0.0;  ///< the law's k, which sets the limit -1/(2k) of smallest_margin
   double min_step = 0.0;    ///< [s] the smallest step a failed step could be cut back to (0: no cut-back)
 };
 
