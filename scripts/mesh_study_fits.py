@@ -30,7 +30,7 @@ import sys
 
 import numpy as np
 
-from mesh_study_io import observed_order, ratio_ending_at, solved
+from mesh_study_io import observed_order, ratio_ending_at, rms, solved
 
 FITS = [("h^2", [2]), ("h^3", [3]), ("h^2 + h^3", [2, 3])]
 
@@ -83,6 +83,30 @@ def print_last_changes(h, u):
           + "; ".join(f"{i}: {1e3 * a:.2f}, {1e3 * b:.2f}, {c:+.2f}" for i, (a, b, c) in enumerate(zip(n1, n2, cosines))))
 
 
+def print_rigid_part(study, h, u):
+    """Split each change between consecutive levels into its best rigid motion (a translation and a small rotation
+    about the samples' centroid, least squares over the samples) and the rest. A change that is mostly rigid moves
+    every sample alike, however far from the probe: it comes from how the whole body deforms and is held (e.g. its
+    surface and volume as the mesh represents them), not from the error under the probe."""
+    if "sample_points_mm" not in study or len(h) < 2:
+        return
+    points = np.array(study["sample_points_mm"])
+    x = points - points.mean(axis=0)
+    rigid = np.zeros((3 * len(points), 6))
+    for i, (a, b, c) in enumerate(x):  # u = t + w x (x - centroid)
+        rigid[3 * i:3 * i + 3, :3] = np.eye(3)
+        rigid[3 * i:3 * i + 3, 3:] = [[0, c, -b], [-c, 0, a], [b, -a, 0]]
+    print("  | change | RMS [um] | its rigid part [um] | the rest [um] | translation [um] | rotation [urad] |")
+    print("  |---|---|---|---|---|---|")
+    for l in range(1, len(h)):
+        d = 1e3 * (u[l] - u[l - 1])  # um
+        motion = np.linalg.lstsq(rigid, d, rcond=None)[0]
+        fitted = rigid @ motion
+        print(f"  | {h[l - 1]:g} -> {h[l]:g} mm | {rms(d):.2f} | {rms(fitted):.2f} | {rms(d - fitted):.2f} | "
+              f"({', '.join(f'{v:.2f}' for v in motion[:3])}) | "
+              f"({', '.join(f'{1e3 * v:.1f}' for v in motion[3:])}) |")
+
+
 def main(path):
     with open(path) as f:
         studies = json.load(f)["mesh_convergence"]
@@ -99,6 +123,7 @@ def main(path):
             print(f"  observed order over {h[i]:g} / {h[i + 1]:g} / {h[i + 2]:g} mm: {order:.2f}")
         print_group_orders(study, h, u)
         print_last_changes(h, u)
+        print_rigid_part(study, h, u)
         print("  | fit | levels | residual RMS [mm] | finest level from u* (RMS) |")
         print("  |---|---|---|---|")
         for name, powers in FITS:
