@@ -214,6 +214,17 @@ TEST(MeshStudyEstimate, RichardsonRecoversTheExactErrorAtTheExpectedOrder) {
   }
 }
 
+// fem.md's hint: only a study of one mesh per level outside the band is told that its order may be the noise's.
+TEST(MeshStudyEstimate, OnlyAnOrderOutsideTheBandFromOneMeshPerLevelGetsTheAveragingHint) {
+  const MeshStudyEstimate outside = estimate_remaining_error(converging_levels(1.0), {27, 18, 12}, 2.0);
+  ASSERT_EQ(outside.json["kind"], "assumed_order");
+  EXPECT_NE(one_mesh_per_level_hint(outside, 1).find("--meshes-per-level 3"), std::string::npos);
+  EXPECT_EQ(one_mesh_per_level_hint(outside, 3), "");
+  const MeshStudyEstimate inside = estimate_remaining_error(converging_levels(2.0), {27, 18, 12}, 2.0);
+  ASSERT_EQ(inside.json["kind"], "richardson");
+  EXPECT_EQ(one_mesh_per_level_hint(inside, 1), "");
+}
+
 TEST(MeshStudyEstimate, AnOrderFarFromTheExpectedOneIsReportedAndNotExtrapolated) {
   // Order 0.2 (a coarse level not yet asymptotic) where 1 is expected: extrapolating with it would give 6x the
   // estimate at the expected order.

@@ -343,6 +343,8 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
     if (estimate.extrapolated.size() > 0)  // the comparator's `--reference extrapolated`
       richardson["extrapolated_sample_displacements_mm"] = rows_in_mm(estimate.extrapolated);
     *md += "\n" + estimate.sentence + "\n";
+    if (const std::string hint = one_mesh_per_level_hint(estimate, opt.meshes_per_level); !hint.empty())
+      *md += hint + "\n";
     if (nlohmann::json zones = orders_by_zone(c, levels.back(), u, h_mm); !zones.is_null()) {
       *md += zones["sentence"].get<std::string>() + "\n";
       zones.erase("sentence");

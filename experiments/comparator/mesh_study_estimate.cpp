@@ -91,6 +91,12 @@ MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u
   return e;
 }
 
+std::string one_mesh_per_level_hint(const MeshStudyEstimate& estimate, int meshes_per_level) {
+  if (meshes_per_level != 1 || estimate.json.value("kind", "") != "assumed_order") return {};
+  return "One mesh per level: the noise between non-nested meshes can move this order by more than the band; "
+         "--meshes-per-level 3 averages it out (docs/FEM_REFERENCE.md, \"The linear lab\").";
+}
+
 std::vector<double> observed_orders(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
                                     const std::vector<Eigen::Index>& rows) {
   if (u.size() != h_mm.size()) throw std::invalid_argument("observed_orders: one mesh size per level");

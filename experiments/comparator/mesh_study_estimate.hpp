@@ -60,6 +60,13 @@ struct MeshStudyEstimate {
 MeshStudyEstimate estimate_remaining_error(const std::vector<Eigen::MatrixXd>& u, const std::vector<double>& h_mm,
                                            double expected_order);
 
+/// What fem.md adds after the estimate's sentence when a study of one mesh per level is outside the asymptotic range
+/// (`estimate.json["kind"]` "assumed_order"): that the order may be the noise's, and how to average it out; empty
+/// otherwise. Gmsh's levels are not nested, and on the one-rate lung_small the noise between meshes 1 % apart is 40–50 %
+/// of the changes between levels: the 27 choices of one of three meshes at each of 8 / 5.3 / 3.55 mm give orders from
+/// 1.22 to 2.69, the means of the three 1.88 (docs/FEM_REFERENCE.md, "The linear lab").
+std::string one_mesh_per_level_hint(const MeshStudyEstimate& estimate, int meshes_per_level);
+
 /// The observed order of each consecutive three levels over the rows `rows` of every `u[l]` (one row per sample, as
 /// `estimate_remaining_error` takes them; 0 where the differences do not decrease), so that groups of samples
 /// refined at different rates can be judged apart: a study that grades the load patch refines the samples within
