@@ -39,11 +39,31 @@ def solved_levels(path, case, with_meshes=False):
     return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"])) for l in levels]
 
 
+def print_estimate_of_the_means(h, means, expected):
+    """The remaining error of the finest level's mean, from the last three levels' means, as `verify fem` estimates it
+    (experiments/comparator/mesh_study_estimate.cpp): Richardson with the observed order when it lies within 0.3 of
+    the expected one; otherwise the order that gives the larger bar (the observed one, at least 1, below the expected
+    one; the expected one above it)."""
+    ratio = ratio_ending_at(h, len(h) - 1)
+    p = order(means[-3], means[-2], means[-1], ratio)
+    within = abs(p - expected) <= 0.3
+    used = p if within else (max(p, 1.0) if p < expected else expected)
+    step = (means[-1] - means[-2]) / (ratio ** used - 1.0)
+    relative = np.linalg.norm(step) / np.linalg.norm(means[-1])
+    print(f"The means of {h[-3]:g} / {h[-2]:g} / {h[-1]:g} mm: observed order {p:.2f}, "
+          f"{'within' if within else 'outside'} {expected:g} +- 0.3; "
+          f"{'Richardson with it' if within else f'order {used:.2f} assumed'}: the finest mean's remaining error is "
+          f"{100 * relative:.2f} % of the sample displacements, {rms(step) * 1e3:.2f} um RMS per sample.")
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("study")
     parser.add_argument("case")
     parser.add_argument("jittered", nargs="*")
+    parser.add_argument("--expected-order", type=float, default=2.0,
+                        help="the order the case's samples are expected to converge at (verify fem's, for the lung "
+                             "cases 2), for the estimate from the levels' means")
     args = parser.parse_args()
 
     with_meshes = solved_levels(args.study, args.case, with_meshes=True)
@@ -93,6 +113,7 @@ def main():
         means = [sum(g) / len(g) for g in meshes[l - 2:l + 1]]
         spread = f"{min(combos):.2f} to {max(combos):.2f} ({len(combos)})" if len(combos) > 1 else "one mesh each"
         print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | {order(*means, ratio):.2f} |")
+    print_estimate_of_the_means(h, [sum(g) / len(g) for g in meshes], args.expected_order)
     print("An order of 0.00 means the changes did not decrease. Levels with one mesh add no noise to the range, so "
           "the range is a lower bound on the spread where a level was not jittered.")
 
