@@ -104,16 +104,16 @@ def main():
         print(f"| {h[l]:g} mm | {len(group)} | {noise * 1e3:.2f} um ({noise / peak * 100:.3f} %) | {change_text} | "
               f"{ratio} |")
 
+    level_means = [sum(g) / len(g) for g in meshes]
     print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means |")
     print("|---|---|---|---|")
     for l in range(2, len(h)):
         ratio = ratio_ending_at(h, l)
         own = order(levels[l - 2][1], levels[l - 1][1], levels[l][1], ratio)
         combos = [order(a, b, c, ratio) for a, b, c in itertools.product(meshes[l - 2], meshes[l - 1], meshes[l])]
-        means = [sum(g) / len(g) for g in meshes[l - 2:l + 1]]
         spread = f"{min(combos):.2f} to {max(combos):.2f} ({len(combos)})" if len(combos) > 1 else "one mesh each"
-        print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | {order(*means, ratio):.2f} |")
-    print_estimate_of_the_means(h, [sum(g) / len(g) for g in meshes], args.expected_order)
+        print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | {order(*level_means[l - 2:l + 1], ratio):.2f} |")
+    print_estimate_of_the_means(h, level_means, args.expected_order)
     print("An order of 0.00 means the changes did not decrease. Levels with one mesh add no noise to the range, so "
           "the range is a lower bound on the spread where a level was not jittered.")
 
