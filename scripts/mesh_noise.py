@@ -27,29 +27,19 @@ import math
 
 import numpy as np
 
-from mesh_study_io import observed_order as order, ratio_ending_at, read_study, rms, solved
+from mesh_study_io import (level_meshes, means, observed_order as order, order_for_the_estimate, ratio_ending_at,
+                           rms)
 
 
-def solved_levels(path, case, with_meshes=False):
-    levels = solved(read_study(path, case))
-    if with_meshes:  # each level's own meshes when `verify fem --meshes-per-level` made it, else its one mesh
-        return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"]),
-                 [np.array(m["sample_displacements_mm"]) for m in l.get("meshes", [])] or
-                 [np.array(l["sample_displacements_mm"])]) for l in levels]
-    return [(l["mesh_size_mm"], np.array(l["sample_displacements_mm"])) for l in levels]
-
-
-def print_estimate_of_the_means(h, means, expected):
+def print_estimate_of_the_means(h, level_means, expected):
     """The remaining error of the finest level's mean, from the last three levels' means, as `verify fem` estimates it
-    (experiments/comparator/mesh_study_estimate.cpp): Richardson with the observed order when it lies within 0.3 of
-    the expected one; otherwise the order that gives the larger bar (the observed one, at least 1, below the expected
-    one; the expected one above it)."""
+    (order_for_the_estimate)."""
     ratio = ratio_ending_at(h, len(h) - 1)
-    p = order(means[-3], means[-2], means[-1], ratio)
-    within = abs(p - expected) <= 0.3
-    used = p if within else (max(p, 1.0) if p < expected else expected)
-    step = (means[-1] - means[-2]) / (ratio ** used - 1.0)
-    relative = np.linalg.norm(step) / np.linalg.norm(means[-1])
+    p = order(level_means[-3], level_means[-2], level_means[-1], ratio)
+    used = order_for_the_estimate(p, expected)
+    within = used == p
+    step = (level_means[-1] - level_means[-2]) / (ratio ** used - 1.0)
+    relative = np.linalg.norm(step) / np.linalg.norm(level_means[-1])
     print(f"The means of {h[-3]:g} / {h[-2]:g} / {h[-1]:g} mm: observed order {p:.2f}, "
           f"{'within' if within else 'outside'} {expected:g} +- 0.3; "
           f"{'Richardson with it' if within else f'order {used:.2f} assumed'}: the finest mean's remaining error is "
@@ -66,21 +56,13 @@ def main():
                              "cases 2), for the estimate from the levels' means")
     args = parser.parse_args()
 
-    with_meshes = solved_levels(args.study, args.case, with_meshes=True)
-    if len(with_meshes) < 3:
-        raise SystemExit(f"{args.study}: {args.case} has {len(with_meshes)} solved levels; an order needs 3")
-    levels = [(size, u) for size, u, _ in with_meshes]
-    h = [size for size, _ in levels]
-    meshes = [list(own) for _, _, own in with_meshes]  # the study's own mesh (or meshes) first
-    distances = []
-    for path in args.jittered:
-        for size, u in solved_levels(path, args.case):
-            nearest = min(range(len(h)), key=lambda l: abs(h[l] - size))
-            if abs(h[nearest] - size) > 0.05 * h[nearest]:
-                print(f"{path}: level {size:g} mm is more than 5 % from every level of {args.study}: left out")
-                continue
-            meshes[nearest].append(u)
-            distances.append((path, size, h[nearest], u - levels[nearest][1]))
+    h, own, meshes, matched, left_out = level_meshes(args.study, args.case, args.jittered)
+    if len(h) < 3:
+        raise SystemExit(f"{args.study}: {args.case} has {len(h)} solved levels; an order needs 3")
+    levels = list(zip(h, own))
+    for path, size in left_out:
+        print(f"{path}: level {size:g} mm is more than 5 % from every level of {args.study}: left out")
+    distances = [(path, size, h[l], u - own[l]) for path, size, l, u in matched]
     peak = max(np.linalg.norm(levels[-1][1], axis=1))
 
     print(f"{args.case}: {len(h)} levels, peak sample displacement {peak:.4f} mm")
@@ -104,7 +86,7 @@ def main():
         print(f"| {h[l]:g} mm | {len(group)} | {noise * 1e3:.2f} um ({noise / peak * 100:.3f} %) | {change_text} | "
               f"{ratio} |")
 
-    level_means = [sum(g) / len(g) for g in meshes]
+    level_means = means(meshes)
     print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means |")
     print("|---|---|---|---|")
     for l in range(2, len(h)):

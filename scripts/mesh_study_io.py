@@ -28,6 +28,47 @@ def solved(study):
     return [level for level in study["levels"] if "sample_displacements_mm" in level and "error" not in level]
 
 
+def level_meshes(path, case, jittered=()):
+    """Every mesh solved at each level of the study at PATH: its own (its `meshes` when `verify fem
+    --meshes-per-level` made it, else its one mesh), then those of the JITTERED studies (the same case at sizes a
+    percent or so away), each matched to the nearest level within 5 % of its size.
+
+    Returns (h, own, meshes, matched, left_out): the levels' sizes [mm]; the study's samples at each level (samples
+    by 3, mm; the mean of its own meshes); each level's list of meshes' samples, the study's own first; the matched
+    jittered meshes as (path, size, level index, samples); and the jittered levels matched to none, as (path, size).
+    """
+    levels = solved(read_study(path, case))
+    h = [l["mesh_size_mm"] for l in levels]
+    own = [np.array(l["sample_displacements_mm"]) for l in levels]
+    meshes = [[np.array(m["sample_displacements_mm"]) for m in l.get("meshes", [])] or [u]
+              for l, u in zip(levels, own)]
+    matched, left_out = [], []
+    for other in jittered:
+        for level in solved(read_study(other, case)):
+            size, u = level["mesh_size_mm"], np.array(level["sample_displacements_mm"])
+            nearest = min(range(len(h)), key=lambda l: abs(h[l] - size))
+            if abs(h[nearest] - size) > 0.05 * h[nearest]:
+                left_out.append((other, size))
+                continue
+            meshes[nearest].append(u)
+            matched.append((other, size, nearest, u))
+    return h, own, meshes, matched, left_out
+
+
+def means(meshes):
+    """Each level's mean over its meshes (level_meshes)."""
+    return [sum(group) / len(group) for group in meshes]
+
+
+def order_for_the_estimate(observed, expected, band=0.3):
+    """The order `verify fem` extrapolates with (experiments/comparator/mesh_study_estimate.cpp): the observed one
+    when it lies within BAND of the expected one; otherwise the one that gives the larger bar (the observed one, at
+    least 1, below the expected one; the expected one above it)."""
+    if abs(observed - expected) <= band:
+        return observed
+    return max(observed, 1.0) if observed < expected else expected
+
+
 def rms(d):
     """RMS over the samples of the distances in d (samples by 3) [the unit of d]."""
     d = np.asarray(d).reshape(-1, 3)
