@@ -87,14 +87,22 @@ def main():
               f"{ratio} |")
 
     level_means = means(meshes)
-    print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means |")
-    print("|---|---|---|---|")
+    # How far the means' order itself rests on each mesh: the means with one mesh left out at each level (a jackknife;
+    # a level with fewer than three meshes keeps them all).
+    leave_one_out = [[sum(g[:k] + g[k + 1:]) / (len(g) - 1) for k in range(len(g))] if len(g) >= 3 else
+                     [sum(g) / len(g)] for g in meshes]
+    print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means | "
+          "order of the means with one mesh left out at each level (range) |")
+    print("|---|---|---|---|---|")
     for l in range(2, len(h)):
         ratio = ratio_ending_at(h, l)
         own = order(levels[l - 2][1], levels[l - 1][1], levels[l][1], ratio)
         combos = [order(a, b, c, ratio) for a, b, c in itertools.product(meshes[l - 2], meshes[l - 1], meshes[l])]
         spread = f"{min(combos):.2f} to {max(combos):.2f} ({len(combos)})" if len(combos) > 1 else "one mesh each"
-        print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | {order(*level_means[l - 2:l + 1], ratio):.2f} |")
+        jack = [order(a, b, c, ratio) for a, b, c in itertools.product(*leave_one_out[l - 2:l + 1])]
+        jack_text = f"{min(jack):.2f} to {max(jack):.2f} ({len(jack)})" if len(jack) > 1 else "fewer than three meshes"
+        print(f"| {h[l - 2]:g} / {h[l - 1]:g} / {h[l]:g} mm | {own:.2f} | {spread} | "
+              f"{order(*level_means[l - 2:l + 1], ratio):.2f} | {jack_text} |")
     print_estimate_of_the_means(h, level_means, args.expected_order)
     print("An order of 0.00 means the changes did not decrease. Levels with one mesh add no noise to the range, so "
           "the range is a lower bound on the spread where a level was not jittered.")
