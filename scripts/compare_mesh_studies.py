@@ -26,7 +26,8 @@ import math
 
 import numpy as np
 
-from mesh_study_io import level_meshes, means, observed_order, order_for_the_estimate, ratio_ending_at, rms
+from mesh_study_io import (level_meshes, means, observed_order, order_for_the_estimate, ratio_ending_at,
+                           richardson_step, rms)
 
 
 def levels(path, case, jittered):
@@ -38,8 +39,7 @@ def levels(path, case, jittered):
 
 
 def extrapolate(u, h, order):
-    r = ratio_ending_at(h, len(h) - 1)
-    step = (u[-1] - u[-2]) / (r ** order - 1.0)
+    step = richardson_step(u, h, order)
     return u[-1] + step, rms(step)
 
 

@@ -28,7 +28,7 @@ import math
 import numpy as np
 
 from mesh_study_io import (level_meshes, means, observed_order as order, order_for_the_estimate, ratio_ending_at,
-                           rms)
+                           richardson_step, rms)
 
 
 def print_estimate_of_the_means(h, level_means, expected):
@@ -38,7 +38,7 @@ def print_estimate_of_the_means(h, level_means, expected):
     p = order(level_means[-3], level_means[-2], level_means[-1], ratio)
     used = order_for_the_estimate(p, expected)
     within = used == p
-    step = (level_means[-1] - level_means[-2]) / (ratio ** used - 1.0)
+    step = richardson_step(level_means, h, used)
     relative = np.linalg.norm(step) / np.linalg.norm(level_means[-1])
     print(f"The means of {h[-3]:g} / {h[-2]:g} / {h[-1]:g} mm: observed order {p:.2f}, "
           f"{'within' if within else 'outside'} {expected:g} +- 0.3; "
@@ -89,8 +89,8 @@ def main():
     level_means = means(meshes)
     # How far the means' order itself rests on each mesh: the means with one mesh left out at each level (a jackknife;
     # a level with fewer than three meshes keeps them all).
-    leave_one_out = [[sum(g[:k] + g[k + 1:]) / (len(g) - 1) for k in range(len(g))] if len(g) >= 3 else
-                     [sum(g) / len(g)] for g in meshes]
+    leave_one_out = [[sum(g[:k] + g[k + 1:]) / (len(g) - 1) for k in range(len(g))] if len(g) >= 3 else [mean]
+                     for g, mean in zip(meshes, level_means)]
     print("| levels | observed order (the study's meshes) | range over the meshes' combinations | order of the means | "
           "order of the means with one mesh left out at each level (range) |")
     print("|---|---|---|---|---|")

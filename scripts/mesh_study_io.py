@@ -69,6 +69,14 @@ def order_for_the_estimate(observed, expected, band=0.3):
     return max(observed, 1.0) if observed < expected else expected
 
 
+def richardson_step(u, h, order):
+    """The Richardson correction of the finest level, (u_f - u_{f-1}) / (r^p - 1), r the mean refinement ratio of the
+    last three levels (as experiments/comparator/mesh_study_estimate.cpp computes it); u* = u_f + the step, and the
+    step is the finest level's estimated error."""
+    r = ratio_ending_at(h, len(h) - 1)
+    return (u[-1] - u[-2]) / (r ** order - 1.0)
+
+
 def rms(d):
     """RMS over the samples of the distances in d (samples by 3) [the unit of d]."""
     d = np.asarray(d).reshape(-1, 3)
