@@ -11,6 +11,8 @@
 #include <functional>
 #include <vector>
 
+#include "core/openblas_kernel.hpp"
+
 namespace bench {
 
 /// A reporter that prints nothing (the processes other than rank 0).
@@ -41,6 +43,7 @@ inline int run_specified_benchmarks_on_every_process(int argc, char** argv) {
 }
 
 inline int run_benchmarks_under_mpi(int argc, char** argv) {
+  core::use_supported_openblas_kernel(argv);  // before MPI: it may run the program again
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
   return run_specified_benchmarks_on_every_process(argc, argv);
 }
@@ -51,6 +54,7 @@ inline int run_benchmarks_under_mpi(int argc, char** argv) {
 /// model and the Krylov solves are distributed over them (meshless/solvers/petsc_krylov_solver.hpp); only rank 0 prints
 /// and writes the --benchmark_out report.
 inline int run_benchmarks_with_petsc(int argc, char** argv, const std::function<void()>& before_finalize = {}) {
+  core::use_supported_openblas_kernel(argv);  // before MPI: it may run the program again
   int petsc_argc = 1;
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
   const int code = run_specified_benchmarks_on_every_process(argc, argv);

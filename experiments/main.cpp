@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "core/case_error.hpp"
+#include "core/openblas_kernel.hpp"
 #include "experiments/commands/case_commands.hpp"
 #include "experiments/commands/fit_commands.hpp"
 #include "experiments/commands/probe_commands.hpp"
@@ -22,6 +23,8 @@
 #include "experiments/commands/verify_commands.hpp"
 
 int main(int argc, char** argv) {
+  // First, before any thread or MPI: OpenBLAS's kernels for this CPU, which may run this program again.
+  core::use_supported_openblas_kernel(argv);
   // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's PETSc Krylov
   // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
   // `solve fem` and `solve meshless` are distributed: other commands would run N copies side by side.
@@ -40,7 +43,10 @@ int main(int argc, char** argv) {
   }
   CLI::App app{"tissue — accuracy and speed of a meshless soft-tissue cutting model against a FEM reference"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "tissue 0.1.0");
+  const std::string blas = core::openblas_core_name();
+  app.set_version_flag("--version", "tissue 0.1.0 (BLAS: " +
+                                        (blas.empty() ? std::string("not OpenBLAS") : "OpenBLAS, " + blas + " kernels") +
+                                        ")");
   experiments::add_case_commands(app);
   experiments::add_solve_commands(app);
   experiments::add_verify_commands(app);

@@ -9,6 +9,8 @@
 #include <iostream>
 #include <string>
 
+#include "core/openblas_kernel.hpp"
+
 extern "C" void dgemm_(const char*, const char*, const int*, const int*, const int*, const double*, const double*,
                        const int*, const double*, const int*, const double*, double*, const int*);
 
@@ -32,6 +34,15 @@ TEST(Blas, DgemmIsNotAtlasGenericBuild) {
   EXPECT_EQ(c[1], 43.0);
   EXPECT_EQ(c[2], 22.0);
   EXPECT_EQ(c[3], 50.0);
+}
+
+// The suite's main() gives OpenBLAS the kernels this CPU supports (tests/gtest_main.cpp): its Prescott fallback,
+// SSE3 only, ran dgemm_ 4x slower on a CPU with AVX-512 that OpenBLAS 0.3.21 did not recognise.
+TEST(Blas, OpenBlasRunsTheKernelsThisCpuSupports) {
+  const std::string kernels = core::openblas_core_name();
+  if (kernels.empty()) GTEST_SKIP() << "dgemm_ is not OpenBLAS's here";
+  std::cout << "OpenBLAS kernels: " << kernels << "; this CPU supports " << core::openblas_core_for_this_cpu() << "\n";
+  if (!core::openblas_core_for_this_cpu().empty()) EXPECT_NE(kernels, "Prescott");
 }
 
 }  // namespace

@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 
+#include "core/openblas_kernel.hpp"
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -25,8 +27,9 @@ struct RunResult {
   std::string output;  // stdout + stderr
 };
 
-RunResult run(const std::string& args) {
-  const std::string command = kTissue + " " + args + " 2>&1";
+/// `environment`: a prefix such as "env NAME=value" for this run alone.
+RunResult run(const std::string& args, const std::string& environment = "") {
+  const std::string command = environment + " " + kTissue + " " + args + " 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   EXPECT_NE(pipe, nullptr);
   std::string output;
@@ -396,6 +399,22 @@ TEST(Cli, VerifyFemAveragesSeveralMeshesPerLevelAndReportsTheirSpread) {
   const RunResult bad = run("verify fem --skip-lung --meshes-per-level 0");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_NE(bad.output.find("--meshes-per-level"), std::string::npos) << bad.output;
+}
+
+// OpenBLAS 0.3.21 runs its generic Prescott kernels on an Intel CPU newer than its table; tissue then runs itself
+// again with the kernels the CPU supports (core/openblas_kernel.hpp), and --version names the ones in use.
+TEST(Cli, VersionNamesTheBlasKernelsAndTheProgramRunsTheOnesItsCpuSupports) {
+  const RunResult chosen = run("--version", "env -u OPENBLAS_CORETYPE");
+  ASSERT_EQ(chosen.exit_code, 0) << chosen.output;
+  if (chosen.output.find("not OpenBLAS") != std::string::npos)
+    GTEST_SKIP() << "dgemm_ is not OpenBLAS's here: " << chosen.output;
+  EXPECT_NE(chosen.output.find(" kernels)"), std::string::npos) << chosen.output;
+  if (!core::openblas_core_for_this_cpu().empty())
+    EXPECT_EQ(chosen.output.find("Prescott"), std::string::npos)
+        << "this CPU supports OpenBLAS's " << core::openblas_core_for_this_cpu() << " kernels: " << chosen.output;
+  // A choice made in the environment is kept: the program does not run again with another.
+  const RunResult forced = run("--version", "env OPENBLAS_CORETYPE=Prescott");
+  EXPECT_NE(forced.output.find("OpenBLAS, Prescott kernels"), std::string::npos) << forced.output;
 }
 
 TEST(Cli, HelpOnEverySubcommand) {

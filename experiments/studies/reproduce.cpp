@@ -17,6 +17,7 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/json_reader.hpp"
+#include "core/openblas_kernel.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/comparator/compare.hpp"
 #include "experiments/studies/cloud_change.hpp"
@@ -531,7 +532,12 @@ std::string timing_md(const json& timing) {
   }
   md += "\nThe ratios are measured in this run, on this machine: compare them, not the absolute seconds. The models "
         "are the plan's /timing/models, or else the timing case's /compare list (docs/CONFIG.md), without the "
-        "floor.\n";
+        "floor.";
+  const std::string kernels = timing.value("openblas_kernels", std::string());
+  md += kernels.empty() ? std::string(" The BLAS is not OpenBLAS.\n")
+                        : fmt::format(" The factorisations ran on OpenBLAS's {} kernels (docs/PERFORMANCE.md, "
+                                      "\"BLAS\").\n",
+                                      kernels);
   if (measured)
     md += fmt::format(
         "\nThe surrogate (paper §3, docs/SURROGATE.md) is trained on `{}` ({:.0f} mm node spacing, {} surface "
@@ -704,6 +710,7 @@ int run_reproduce(const ReproduceOptions& options) {
     json timing = {{"config", plan.timing.config},
                    {"steps", plan.timing.steps},
                    {"geometry_seconds", progress.elapsed_seconds() - t0},
+                   {"openblas_kernels", core::openblas_core_name()},  // "" when the BLAS is not OpenBLAS
                    {"models", json::array()},
                    {"surrogate", {{"status", "not measured: the plan's /timing has no surrogate case"}}},
                    {"rows", json::array()}};
