@@ -467,6 +467,17 @@ TEST(CompareCommand, HelpAndBadInput) {
   EXPECT_EQ(r.exit_code, 2) << r.output;
   EXPECT_NE(r.output.find("bad.json: /material/K1: expected a number > 0"), std::string::npos) << r.output;
   EXPECT_FALSE(fs::exists(dir / "out")) << "a failed compare must leave nothing behind";
+  // A --reference-family study of another case is refused before any solve, naming the file and what was expected.
+  const RunResult family = run("compare " + std::string(TISSUE_TEST_CONFIG_DIR) + "/ci/lung_small_ci.json --out " +
+                               (dir / "out" / "y").string() + " --reference-family " + std::string(TISSUE_SOURCE_DIR) +
+                               "/results/verify/one_rate/lung_small/fem.json");
+  EXPECT_EQ(family.exit_code, 2) << family.output;
+  EXPECT_NE(family.output.find("one_rate/lung_small/fem.json: /mesh_convergence/lung_small_ci: a mesh study of case "
+                               "'lung_small_ci' was expected"),
+            std::string::npos)
+      << family.output;
+  EXPECT_EQ(family.output.find("FEM step"), std::string::npos) << family.output;
+  EXPECT_FALSE(fs::exists(dir / "out")) << "a failed compare must leave nothing behind";
   fs::remove_all(dir);
 }
 

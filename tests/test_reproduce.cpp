@@ -58,6 +58,12 @@ TEST(ReproducePlan, ShippedPlanIsThePapersTable1AndFig9) {
   ASSERT_EQ(plan.table1[1].cloud_studies.size(), 3u);
   for (const std::string& study : plan.table1[1].cloud_studies)
     EXPECT_TRUE(std::filesystem::is_directory(study + "/runs")) << study;
+  // Both rows read their error bar from the one-rate family of their own problem, three meshes per level (the
+  // studies named beside each other), whose means converge at an order in the band.
+  for (const auto& row : plan.table1) {
+    ASSERT_EQ(row.reference_family.size(), 2u) << row.label;
+    for (const std::string& study : row.reference_family) EXPECT_TRUE(std::filesystem::exists(study)) << study;
+  }
   // Fig. 9: 8 groups of forces within 0-4 N at one stressed point.
   ASSERT_EQ(plan.timing.forces.size(), 8u);
   for (double f : plan.timing.forces) {
@@ -147,6 +153,12 @@ TEST(ReproducePlan, BadPlansNameTheFileAndTheJsonPath) {
   no_folder.insert(no_folder.find("}}") + 1, ", \"cloud_studies\": [\"a\", 3]");  // in /table1/0
   const std::string cloud = error_of(write_plan("cloud", no_folder));
   EXPECT_NE(cloud.find("/table1/0/cloud_studies/1"), std::string::npos) << cloud;
+
+  std::string no_study = plan_text(lung, "[1.0]", "large");
+  no_study.insert(no_study.find("}}") + 1, ", \"reference_family\": [\"no_such_study.json\"]");  // in /table1/0
+  const std::string family = error_of(write_plan("family", no_study));
+  EXPECT_NE(family.find("/table1/0/reference_family/0"), std::string::npos) << family;
+  EXPECT_NE(family.find("no_such_study.json does not exist"), std::string::npos) << family;
 
   std::string unknown_model = plan_text(lung, "[1.0]", "large");
   unknown_model.insert(unknown_model.size() - 2, ", \"models\": [\"enrichment\", \"lrpm\"]");  // inside /timing
@@ -259,20 +271,30 @@ TEST(CloudChange, AgainstTheExtrapolatedFemReadsTheRunsRmsesAgainstIt) {
   std::filesystem::remove_all(root);
   experiments::CloudChangeBaseline row{"enrichment", "visibility", 0.1210, 0.1265, 9.8187};
   row.versus_extrapolated = true;
+  row.extrapolated_bar_mm = 0.0122;
   write_run(root / "a", "old", 9.8187, 0.0670, 0.1652);  // no versus_extrapolated
   write_run(root / "a", "new", 9.8187, 0.0670, 0.1652);
-  const auto summary = root / "a" / "runs" / "new" / "summary.json";
-  nlohmann::json s = nlohmann::json::parse(std::ifstream(summary));
-  s["versus_extrapolated"]["models"] = {{"enrichment", {{"rmse_mm", 0.0900}}}, {"visibility", {{"rmse_mm", 0.1100}}}};
-  std::ofstream(summary) << s.dump();
+  write_run(root / "a", "other_study", 9.8187, 0.0670, 0.1652);
+  const auto with_extrapolated = [&](const std::string& run, double bar_mm, double p_mm, double b_mm) {
+    const auto summary = root / "a" / "runs" / run / "summary.json";
+    nlohmann::json s = nlohmann::json::parse(std::ifstream(summary));
+    s["versus_extrapolated"] = {{"error_bar_mm", bar_mm},
+                                {"models", {{"enrichment", {{"rmse_mm", p_mm}}}, {"visibility", {{"rmse_mm", b_mm}}}}}};
+    std::ofstream(summary) << s.dump();
+  };
+  with_extrapolated("new", 0.0122, 0.0900, 0.1100);
+  // Scored against another study's extrapolation (another bar): its -0.1 mm difference must not count.
+  with_extrapolated("other_study", 0.0096, 0.0100, 0.1100);
   const experiments::CloudChange c = experiments::cloud_change({(root / "a").string()}, row);
   ASSERT_TRUE(c.known) << c.why_unknown;
   // The difference moves from -0.0055 to -0.0200 mm (not from the solved reference's RMSEs, -0.0982).
   EXPECT_NEAR(c.mm, 0.0145, 1e-12);
   EXPECT_EQ(c.measure, "difference");
-  ASSERT_EQ(c.runs.size(), 2u);
-  EXPECT_EQ(c.runs[0]["enrichment"]["rmse_mm"], 0.0900);  // "new" sorts before "old"
+  ASSERT_EQ(c.runs.size(), 3u);
+  EXPECT_EQ(c.runs[0]["enrichment"]["rmse_mm"], 0.0900);  // "new" sorts before "old" and "other_study"
   EXPECT_NE(c.runs[1]["unused"].get<std::string>().find("no RMSEs against the extrapolated FEM"), std::string::npos)
+      << c.runs.dump();
+  EXPECT_NE(c.runs[2]["unused"].get<std::string>().find("another mesh study's extrapolated samples"), std::string::npos)
       << c.runs.dump();
 }
 

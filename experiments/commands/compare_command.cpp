@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "experiments/comparator/compare.hpp"
+#include "experiments/comparator/mesh_family_error_bar.hpp"
 #include "experiments/models/external/external_result.hpp"
 #include "experiments/io/progress.hpp"
 #include "experiments/models/model_registry.hpp"
@@ -33,9 +34,17 @@ void add_compare_command(CLI::App& app) {
                   "`tissue verify fem` result (fem.json) holding a mesh study of this exact reference; the error "
                   "bar is reported as unknown otherwise")
       ->capture_default_str();
+  cmd->add_option("--reference-family", options.reference_family,
+                  "A `tissue verify fem` result (fem.json) of this case's problem in another mesh family (its case may "
+                  "differ only in the discretisation: /geometry/mesh_size, /geometry/refinement, /fem, /meshless, ...); "
+                  "repeatable: studies beside one another are averaged level by level. When given, the error bar is "
+                  "measured against the family's finest level instead of read from --reference-error (docs/EXPERIMENTS.md)")
+      ->type_name("FILE")
+      ->allow_extra_args(false);
   cmd->add_option("--reference", options.reference_samples,
                   "Which samples stand for the reference: the FEM as solved here, or the Richardson-extrapolated "
-                  "samples of the --reference-error study (which must have solved exactly this reference)")
+                  "samples of the --reference-error study (which must have solved exactly this reference) or of the "
+                  "--reference-family")
       ->check(CLI::IsMember({"solved", "extrapolated"}))
       ->capture_default_str();
   cmd->add_flag("--no-plot", no_plot, "Do not run scripts/plot_radar.py (no radar.png)");
@@ -57,6 +66,9 @@ void add_compare_command(CLI::App& app) {
       for (const auto& e : externals) options.externals.push_back(parse_external_spec(e));
       throw CommandResult{run_compare(config, options)};
     } catch (const ExternalResultError& e) {  // a bad input file, like a bad case: exit 2, nothing written
+      std::cerr << "error: " << e.what() << "\n";
+      throw CommandResult{2};
+    } catch (const MeshFamilyError& e) {  // the same for a --reference-family study
       std::cerr << "error: " << e.what() << "\n";
       throw CommandResult{2};
     }

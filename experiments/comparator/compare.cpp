@@ -13,6 +13,7 @@
 #include "core/case.hpp"
 #include "core/geometry.hpp"
 #include "core/output_directory.hpp"
+#include "experiments/comparator/mesh_family_error_bar.hpp"
 #include "experiments/io/child_process.hpp"
 #include "experiments/models/model_registry.hpp"
 #include "experiments/io/progress.hpp"
@@ -493,7 +494,8 @@ void use_extrapolated_reference(const std::string& file, Comparison* cmp) {
     throw std::runtime_error(fmt::format(
         "--reference extrapolated needs a mesh study of exactly this reference with extrapolated samples in {}: {}; "
         "run `tissue verify fem --config {}` (its sizes ending at or below this case's mesh size) and pass its "
-        "fem.json with --reference-error, or compare with the solved reference",
+        "fem.json with --reference-error (or studies of another mesh family with --reference-family), or compare "
+        "with the solved reference",
         file, bar.known ? "the study holds no extrapolated samples (written by verify fem since the elastic support)"
                         : bar.why_unknown,
         cmp->config));
@@ -544,7 +546,11 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   // file is refused in seconds, never after the solves.
   std::vector<ExternalSamples> external_samples;
   for (const auto& e : options.externals) external_samples.push_back(read_external_samples(e.file, c.samples.count));
-  if (options.reference_samples == "extrapolated" && !std::filesystem::exists(options.reference_error_file))
+  // Another mesh family's studies are read and checked now too: a wrong study costs seconds, not the solves.
+  std::optional<MeshFamily> family;
+  if (!options.reference_family.empty()) family = read_mesh_family(options.reference_family, c);
+  if (options.reference_samples == "extrapolated" && !family &&
+      !std::filesystem::exists(options.reference_error_file))
     throw std::runtime_error(fmt::format("--reference extrapolated needs the mesh study given by --reference-error, "
                                          "but {} does not exist; run `tissue verify fem --config {}` first",
                                          options.reference_error_file, config));
@@ -567,6 +573,7 @@ int run_compare(const std::string& config, const CompareOptions& options) {
   cmp.case_name = c.name;
   cmp.config = config;
   cmp.sample_points = g.sample_points;
+  if (family) check_family_sample_points(*family, g.sample_points);
   cmp.has_cut = g.cut.has_value();
   cmp.reference_name = models.front()->name();
   std::vector<std::pair<std::string, ModelResult>> externals;
@@ -621,8 +628,10 @@ int run_compare(const std::string& config, const CompareOptions& options) {
       options.patch_edge_distance.value_or(core::kPatchEdgeBandPerLoadRadius * c.load.radius);
   cmp.rules.cut_distance = options.cut_distance.value_or(c.meshless.node_spacing);
   cmp.diagnostics = diagnose_samples(g.sample_points, g.load_centre, c.load.radius, g.cut, cmp.rules);
-  cmp.error_bar = lookup_error_bar(options.reference_error_file, c, cmp.reference.sample_displacements);
-  if (options.reference_samples == "extrapolated") use_extrapolated_reference(options.reference_error_file, &cmp);
+  cmp.error_bar = family ? error_bar_against_family(*family, g.sample_points, cmp.reference.sample_displacements)
+                         : lookup_error_bar(options.reference_error_file, c, cmp.reference.sample_displacements);
+  if (options.reference_samples == "extrapolated")
+    use_extrapolated_reference(family ? cmp.error_bar.source : options.reference_error_file, &cmp);
   json summary = comparison_summary(cmp);
 
   write_text_file(out.file("case.json").string(), c.document.dump(2) + "\n");

@@ -30,12 +30,17 @@ struct CompareOptions {
   /// A `tissue verify fem` result (fem.json) to take the reference's error bar from; a missing file only
   /// means the error bar is unknown.
   std::string reference_error_file = "results/verify/fem.json";
+  /// Mesh studies (fem.json) of this case's problem in another mesh family, their levels averaged by size
+  /// (experiments/comparator/mesh_family_error_bar.hpp); when given, the error bar and the extrapolated samples are
+  /// theirs instead of reference_error_file's. Read and checked before any solve.
+  std::vector<std::string> reference_family;
   bool plot = true;  ///< run scripts/plot_radar.py for radar.png
   /// Cut cases: also solve every model without the cut and report each model's cut effect against the FEM's.
   bool cut_effect = true;
   /// Which samples stand for the reference: "solved" (this run's FEM solve) or "extrapolated" (the
   /// Richardson-extrapolated samples of the mesh study in reference_error_file, which must have solved exactly this
-  /// reference; their bar is the study's finest level's). The FEM is solved either way, to check the study.
+  /// reference, or of the reference_family; their bar is the study's finest level's). The FEM is solved either way,
+  /// to check the study.
   std::string reference_samples = "solved";
   /// Other programs' sample displacements to score beside the built-in models (`--external NAME=FILE`), in the
   /// order given; each is read and checked before any solve (experiments/models/external/external_result.hpp).

@@ -68,6 +68,13 @@ nlohmann::json ReferenceErrorBar::to_json() const {
   return {{"known", true}, {"rms_mm", rms_mm}, {"relative", relative}, {"method", method}, {"source", source}};
 }
 
+std::string estimate_method(const nlohmann::json& richardson) {
+  if (richardson.contains("observed_order"))
+    return fmt::format("Richardson extrapolation over the study's last three levels (observed order {:.2f})",
+                       richardson["observed_order"].get<double>());
+  return richardson.value("note", std::string("the study's estimate"));
+}
+
 ReferenceErrorBar reference_error_bar(const nlohmann::json& verify_fem, const std::string& source,
                                       const std::string& case_name, double mesh_size,
                                       const Eigen::MatrixXd& fem_samples) {
@@ -120,12 +127,7 @@ ReferenceErrorBar reference_error_bar(const nlohmann::json& verify_fem, const st
     return unknown(fmt::format("the study of '{}' has no error estimate ({})", case_name,
                                richardson.value("note", std::string("fewer than three solved levels"))));
   const double finest_relative = richardson["estimated_error_of_finest_relative"].get<double>();
-  std::string finest_method;
-  if (richardson.contains("observed_order"))
-    finest_method = fmt::format("Richardson extrapolation over the study's last three levels (observed order {:.2f})",
-                                richardson["observed_order"].get<double>());
-  else
-    finest_method = richardson.value("note", std::string("the study's estimate"));
+  const std::string finest_method = estimate_method(richardson);
   bar.known = true;
   if (richardson.contains("extrapolated_sample_displacements_mm")) {
     nlohmann::json level = {{"sample_displacements_mm", richardson["extrapolated_sample_displacements_mm"]}};

@@ -63,6 +63,11 @@ struct ReferenceErrorBar {
   nlohmann::json to_json() const;
 };
 
+/// How a study's estimate of its finest level's error was made (a `verify fem` "richardson" object): "Richardson
+/// extrapolation over the study's last three levels (observed order p)", or the estimate's own note when its order
+/// was outside the asymptotic range.
+std::string estimate_method(const nlohmann::json& richardson);
+
 /// Look the reference up in a `tissue verify fem` result (fem.json): the study of the case with this name
 /// applies only when one of its solved levels has this mesh size and the same sample displacements as this run
 /// (to a relative 1e-6), i.e. when the study solved exactly this reference. At the study's finest level the

@@ -80,6 +80,18 @@ CloudChange cloud_change(const std::vector<std::string>& study_dirs, const Cloud
         result.runs.push_back(run);
         continue;
       }
+      if (row.versus_extrapolated) {
+        // The extrapolated samples are identified by their bar: a run scored against another mesh study's
+        // extrapolation (a sweep run before the row's reference_family was chosen) measures another distance.
+        const double bar = s.at("versus_extrapolated").value("error_bar_mm", 0.0);
+        if (!(std::abs(bar - row.extrapolated_bar_mm) <= 1e-9 * std::abs(row.extrapolated_bar_mm))) {
+          run["unused"] = fmt::format("scored against another mesh study's extrapolated samples (their bar {:.6g} mm, "
+                                      "this row's {:.6g} mm)",
+                                      bar, row.extrapolated_bar_mm);
+          result.runs.push_back(run);
+          continue;
+        }
+      }
       const double p = rmse_of(s, row.proposed, row.versus_extrapolated),
                    b = rmse_of(s, row.baseline, row.versus_extrapolated);
       for (const std::string& name : {row.proposed, row.baseline}) {

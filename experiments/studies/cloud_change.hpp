@@ -26,6 +26,9 @@ struct CloudChangeBaseline {
   /// false: the RMSEs against the solved reference (summary.json `models`); true: against the extrapolated samples
   /// (`versus_extrapolated.models`), which a run written before compare wrote them lacks (it is then unused).
   bool versus_extrapolated = false;
+  /// With versus_extrapolated: the bar of the row's extrapolated samples [mm] (summary.json
+  /// `versus_extrapolated.error_bar_mm`), which identifies them; a run scored against other ones is unused.
+  double extrapolated_bar_mm = 0.0;
 };
 
 struct CloudChange {

@@ -105,6 +105,7 @@ CloudChange row_cloud_change(const ReproducePlan::Table1Case& t, const json& row
                                m.at(b->at("name").get<std::string>()).at("rmse_mm").get<double>(),
                                row.at("peak_reference_mm").get<double>()};
   baseline.versus_extrapolated = true;
+  baseline.extrapolated_bar_mm = converged.at("error_bar_mm").get<double>();
   return cloud_change(t.cloud_studies, baseline);
 }
 
@@ -457,10 +458,12 @@ std::string table1_md(const json& rows) {
         "solve, compared with the FEM's, so that the meshless model's common discretisation error does not decide "
         "which cut treatment wins. The meshless cloud change is how far the difference moves when only the node cloud "
         "changes (the plan's cloud_studies; where the proposed model solves on no other cloud, the largest change of "
-        "one model's RMSE stands in for it). Against the extrapolated FEM: each model's RMSE against the samples "
-        "that the committed mesh study (results/verify/fem.json) extrapolated from its two finest levels, whose bar "
-        "(their estimated error) is far smaller than that of the solved reference: how far each model is from the "
-        "converged FEM. The verdict's significance sets the difference of the RMSEs against the "
+        "one model's RMSE stands in for it). The reference's error bar comes from the committed mesh study its cell "
+        "names: results/verify/fem.json, which solved this very reference as its coarsest level, or (the plan's "
+        "reference_family) studies of the same problem in another mesh family, averaged over the meshes beside each "
+        "level. Against the extrapolated FEM: each model's RMSE against the samples that study extrapolated from "
+        "its two finest levels, whose bar (their estimated error) is far smaller than that of the solved reference: "
+        "how far each model is from the converged FEM. The verdict's significance sets the difference of the RMSEs against the "
         "reference's error bar (RMS) and the cloud change combined, sqrt(bar² + change²): above 2× significant, 1–2× "
         "marginal; then the same against the extrapolated FEM, with their bar. Each case's full comparison (per-sample "
         "errors, flags, timings, radar diagram) is in its sub-folder.\n";
@@ -600,6 +603,18 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
         row.cloud_studies.push_back(relative_to_plan(file, studies[k].get<std::string>()).string());
       }
     }
+    if (t.has("reference_family")) {
+      const json& studies =
+          t.array("reference_family", 1, "a non-empty array of fem.json files of `tissue verify fem`, relative to the plan");
+      for (std::size_t k = 0; k < studies.size(); ++k) {
+        if (!studies[k].is_string() || studies[k].get<std::string>().empty())
+          t.fail(fmt::format("reference_family/{}", k), "a fem.json file (a string, relative to the plan's folder)");
+        const std::string study = relative_to_plan(file, studies[k].get<std::string>()).string();
+        if (!std::filesystem::exists(study))
+          t.fail(fmt::format("reference_family/{}", k), fmt::format("an existing fem.json ({} does not exist)", study));
+        row.reference_family.push_back(study);
+      }
+    }
     t.finish();
     for (const auto& other : plan.table1)
       if (other.label == row.label) t.fail("label", "a label no other Table 1 case has");
@@ -690,6 +705,7 @@ int run_reproduce(const ReproduceOptions& options) {
       CompareOptions compare;
       compare.out_dir = out.file(t.label).string();
       compare.plot = options.plot;
+      compare.reference_family = t.reference_family;
       if (const int code = run_compare(t.config, compare); code != 0)
         throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
       json row = table1_row(t, read_json_file(out.file(t.label + "/summary.json").string()));

@@ -32,6 +32,10 @@ struct ReproducePlan {
     /// Sweep folders over this case's node cloud (resolved; experiments/studies/cloud_change.hpp): the meshless
     /// model's own change between clouds, which the verdict combines with the reference's error bar.
     std::vector<std::string> cloud_studies;
+    /// fem.json files (resolved) of this case's problem in another mesh family, whose levels are averaged by size:
+    /// the reference's error bar is measured against them (CompareOptions::reference_family); empty: compare's
+    /// --reference-error default, the study of this very reference.
+    std::vector<std::string> reference_family;
   };
   struct Timing {
     std::string config;          ///< the case whose load point is stressed, resolved to a path
