@@ -119,7 +119,7 @@ TEST(MeshFamily, AveragesTheMeshesBesideEachLevelAndMeasuresTheBarAgainstItsFine
   ASSERT_TRUE(bar.extrapolated_samples.has_value());
   EXPECT_NEAR((*bar.extrapolated_samples - s.exact).norm(), 0.0, 1e-6 * (64.0 * s.shape).norm());
   EXPECT_NEAR(bar.extrapolated_rms_mm(), (64.0 * s.shape).norm() * 1e3 / 2.0, 1e-6 * expected);
-  EXPECT_NE(bar.method.find("8 mm (the mean of 3 meshes)"), std::string::npos) << bar.method;
+  EXPECT_NE(bar.method.find("8 mm, the mean of 3 meshes"), std::string::npos) << bar.method;
   EXPECT_NE(bar.method.find("observed order 2.00"), std::string::npos) << bar.method;
   EXPECT_NE(bar.source.find("b.json"), std::string::npos) << bar.source;
 
@@ -168,6 +168,13 @@ TEST(MeshFamily, RefusesAMeshFarFromEveryLevelTooFewLevelsAndOtherSamples) {
   } catch (const MeshFamilyError& e) {
     EXPECT_NE(std::string(e.what()).find("a mesh of 10 mm lies more than 5 % from every level"), std::string::npos)
         << e.what();
+  }
+  // The meshes beside the levels given first: their levels pair up 2 % apart, which is no family of levels.
+  try {
+    experiments::read_mesh_family({files[1], files[0]}, c);
+    FAIL() << "a study of pairs of meshes 2 % apart was taken for the family's levels";
+  } catch (const MeshFamilyError& e) {
+    EXPECT_NE(std::string(e.what()).find("lie within 5 % of each other"), std::string::npos) << e.what();
   }
   write_study(dir / "two.json", config, s.points, {{18.0, s.mesh(18.0, 0)}, {12.0, s.mesh(12.0, 0)}});
   EXPECT_THROW(experiments::read_mesh_family({(dir / "two.json").string()}, c), MeshFamilyError);

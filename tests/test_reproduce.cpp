@@ -334,6 +334,15 @@ TEST(CloudChange, VerdictCombinesTheReferenceBarAndTheCloudChange) {
                                                   "combined: significant"),
             std::string::npos)
       << experiments::table1_verdict(row);
+  // Table 1's lung_large of 30 Nov 2026: 0.0040 mm against hypot(0.0096, 0.1068) = 0.1072 mm is 0.037, which keeps
+  // two decimals ("0.0×" would read as no difference).
+  nlohmann::json small = row;
+  small["reference_error_bar"]["rms_mm"] = 0.071;
+  small["cloud_change"]["mm"] = 0.1068;
+  small["versus_extrapolated"] = {{"error_bar_mm", 0.0096},
+                                  {"models", {{"enrichment", {{"rmse_mm", 0.1211}}}, {"visibility", {{"rmse_mm", 0.1251}}}}}};
+  EXPECT_NE(experiments::table1_verdict(small).find("enrichment closer by 0.0040 mm, 0.04× their bar"), std::string::npos)
+      << experiments::table1_verdict(small);
   // With them: 0.04 / hypot(0.0122, 0.03) = 1.2.
   row["cloud_change_versus_extrapolated"] = {{"known", true}, {"mm", 0.03}, {"measure", "difference"}};
   EXPECT_NE(experiments::table1_verdict(row).find("against the extrapolated FEM visibility closer by 0.0400 mm, 1.2× "
@@ -385,7 +394,8 @@ TEST(ReproducePlan, Table1MarkdownShowsTheConvergedFemColumnAndBothCloudChanges)
                   "0.0700 mm from them"))
       << md;
   EXPECT_TRUE(has("| 0.1068 (difference); against the extrapolated FEM 0.0562 (difference) |")) << md;
-  EXPECT_TRUE(has("0.1× their bar and the cloud change against them combined: not significant")) << md;
+  // 0.0055 / hypot(0.0122, 0.0562) = 0.096: below 0.1, two decimals.
+  EXPECT_TRUE(has("0.10× their bar and the cloud change against them combined: not significant")) << md;
   EXPECT_TRUE(has("cutting: the meshless cloud change against the extrapolated FEM, from the kept runs of its cloud "
                   "studies:\n- runs/a: enrichment 0.0711 mm (12217 nodes)\n- runs/old: unused, no RMSEs against "
                   "the extrapolated FEM"))

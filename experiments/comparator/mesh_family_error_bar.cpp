@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 namespace experiments {
 namespace {
@@ -117,7 +118,14 @@ MeshFamily read_mesh_family(const std::vector<std::string>& files, const core::C
           fail(fmt::format("{}: {} samples, where the family's first study has {}", level_at, u->rows(),
                            family.sample_points.rows()));
         if (f == 0 && &mesh == &meshes.front()) {
-          family.h_mm.push_back(level.value("mesh_size_mm", size));
+          const double nominal = level.value("mesh_size_mm", size);
+          for (double h : family.h_mm)
+            if (std::abs(nominal / h - 1.0) <= kFamilyLevelTolerance)
+              fail(fmt::format("{}: levels {} and {} mm lie within {:.0f} % of each other; the first study gives the "
+                               "family's levels (pass the study of the nominal sizes first, the meshes beside them "
+                               "after it)",
+                               level_at, h, nominal, 100 * kFamilyLevelTolerance));
+          family.h_mm.push_back(nominal);
           levels.emplace_back();
         }
         // The nominal level nearest this mesh's size.
@@ -163,11 +171,10 @@ ReferenceErrorBar error_bar_against_family(const MeshFamily& family, const Eigen
   const double finest_error = finest_relative * finest.norm();
   const double to_finest = (fem_samples - finest).norm();
   const int meshes = family.meshes.back();
-  const std::string finest_name =
-      meshes > 1 ? fmt::format("{} mm (the mean of {} meshes)", family.h_mm.back(), meshes)
-                 : fmt::format("{} mm", family.h_mm.back());
+  const std::string finest_name = meshes > 1 ? fmt::format("{} mm, the mean of {} meshes", family.h_mm.back(), meshes)
+                                             : fmt::format("{} mm", family.h_mm.back());
   const std::string finest_method =
-      fmt::format("{}; the family's levels {} mm, of {} meshes", estimate_method(family.estimate.json),
+      fmt::format("{}; the family's levels {} mm of {} meshes", estimate_method(family.estimate.json),
                   fmt::join(family.h_mm, " / "), fmt::join(family.meshes, " / "));
 
   ReferenceErrorBar bar;
@@ -175,15 +182,15 @@ ReferenceErrorBar error_bar_against_family(const MeshFamily& family, const Eigen
   bar.source = fmt::format("{}", fmt::join(family.files, ", "));
   bar.relative = (to_finest + finest_error) / fem_samples.norm();
   bar.method = fmt::format(
-      "measured against the finest level of another mesh family of this problem ({}), {} ({:.2f} % of this "
-      "reference), plus that level's own error ({:.2f} %: {})",
+      "measured against the finest level of another mesh family of this problem ({}): {}, {:.2f} % of this "
+      "reference; plus that level's own error ({:.2f} %: {})",
       family.config, finest_name, 100.0 * to_finest / fem_samples.norm(), 100.0 * finest_relative, finest_method);
   bar.rms_mm = bar.relative * fem_samples.norm() * 1e3 / std::sqrt(static_cast<double>(fem_samples.rows()));
   if (family.estimate.extrapolated.size() > 0) {
     bar.extrapolated_samples = family.estimate.extrapolated;
     bar.extrapolated_relative = finest_error / family.estimate.extrapolated.norm();
     bar.extrapolated_method = fmt::format("the samples extrapolated from the last two levels of another mesh family "
-                                          "of this problem ({}); their bar is the finest level's ({}) estimated error",
+                                          "of this problem ({}); their bar is the estimated error of the finest level ({})",
                                           finest_method, finest_name);
   }
   return bar;

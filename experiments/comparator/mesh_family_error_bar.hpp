@@ -38,6 +38,7 @@ inline const std::vector<std::string> kDiscretisationKeys{"/description", "/geom
 /// apart belong to one level, the next level (a ratio of 1.5) never does.
 inline constexpr double kFamilyLevelTolerance = 0.05;
 
+/// A refused family: what() is "FILE: <what was expected and what was found>" (with the JSON path where there is one).
 class MeshFamilyError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;

@@ -167,8 +167,10 @@ std::string table1_verdict(const json& r) {
   const auto significance = [](double ratio) {
     return ratio > 2.0 ? "significant" : ratio > 1.0 ? "marginal" : "not significant";
   };
+  // A ratio below 0.1 keeps two decimals: "0.0×" would read as no difference at all.
+  const auto times = [](double ratio) { return fmt::format(ratio < 0.1 ? "{:.2f}×" : "{:.1f}×", ratio); };
   const double ratio = std::abs(difference) / std::hypot(bar_mm, cloud_mm);
-  std::string verdict = fmt::format("{} closer{}; the difference is {:.1f}× {}: {}", closer, effect, ratio,
+  std::string verdict = fmt::format("{} closer{}; the difference is {} {}: {}", closer, effect, times(ratio),
                                     with_cloud ? "the reference's bar and the cloud change combined"
                                                : "the reference's bar (the cloud change is not measured)",
                                     significance(ratio));
@@ -184,8 +186,8 @@ std::string table1_verdict(const json& r) {
     const bool with_cloud_x = cloud_x.value("known", false);
     const double cloud_x_mm = with_cloud_x ? cloud_x.at("mm").get<double>() : cloud_mm;
     const double r_converged = std::abs(d) / std::hypot(converged.at("error_bar_mm").get<double>(), cloud_x_mm);
-    verdict += fmt::format("; against the extrapolated FEM {} closer by {:.4f} mm, {:.1f}× {}: {}", d < 0 ? p : b,
-                           std::abs(d), r_converged,
+    verdict += fmt::format("; against the extrapolated FEM {} closer by {:.4f} mm, {} {}: {}", d < 0 ? p : b,
+                           std::abs(d), times(r_converged),
                            with_cloud_x ? "their bar and the cloud change against them combined"
                            : with_cloud ? "their bar and the cloud change against the solved reference combined"
                                         : "their bar",
