@@ -68,6 +68,19 @@ nlohmann::json ReferenceErrorBar::to_json() const {
   return {{"known", true}, {"rms_mm", rms_mm}, {"relative", relative}, {"method", method}, {"source", source}};
 }
 
+std::optional<Eigen::MatrixXd> sample_rows(const nlohmann::json& rows) {
+  if (!rows.is_array()) return std::nullopt;
+  Eigen::MatrixXd m(static_cast<Eigen::Index>(rows.size()), 3);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    if (!rows[i].is_array() || rows[i].size() != 3) return std::nullopt;
+    for (std::size_t k = 0; k < 3; ++k) {
+      if (!rows[i][k].is_number()) return std::nullopt;
+      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = rows[i][k].get<double>();
+    }
+  }
+  return m;
+}
+
 std::string estimate_method(const nlohmann::json& richardson) {
   if (richardson.contains("observed_order"))
     return fmt::format("Richardson extrapolation over the study's last three levels (observed order {:.2f})",
@@ -105,11 +118,8 @@ ReferenceErrorBar reference_error_bar(const nlohmann::json& verify_fem, const st
                                "{} mm)",
                                mesh_size * 1e3, finest_size));
   auto samples_of = [&](const nlohmann::json& level) -> std::optional<Eigen::MatrixXd> {
-    const auto& samples = level["sample_displacements_mm"];
-    if (static_cast<Eigen::Index>(samples.size()) != fem_samples.rows()) return std::nullopt;
-    Eigen::MatrixXd u(fem_samples.rows(), 3);
-    for (Eigen::Index i = 0; i < u.rows(); ++i)
-      for (int k = 0; k < 3; ++k) u(i, k) = samples[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+    std::optional<Eigen::MatrixXd> u = sample_rows(level["sample_displacements_mm"]);
+    if (u && u->rows() != fem_samples.rows()) u.reset();
     return u;
   };
   const std::optional<Eigen::MatrixXd> study_u = samples_of(*level_h), finest_u = samples_of(*finest);

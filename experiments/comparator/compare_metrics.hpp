@@ -63,6 +63,10 @@ struct ReferenceErrorBar {
   nlohmann::json to_json() const;
 };
 
+/// The rows of a `verify fem` sample array ([[x, y, z], ...], as written: sample_points_mm, sample_displacements_mm)
+/// as a #rows by 3 matrix in the file's units; nullopt when it is not an array of three numbers per row.
+std::optional<Eigen::MatrixXd> sample_rows(const nlohmann::json& rows);
+
 /// How a study's estimate of its finest level's error was made (a `verify fem` "richardson" object): "Richardson
 /// extrapolation over the study's last three levels (observed order p)", or the estimate's own note when its order
 /// was outside the asymptotic range.

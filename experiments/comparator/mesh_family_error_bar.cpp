@@ -19,17 +19,10 @@ bool is_discretisation_key(const std::string& pointer) {
   });
 }
 
-/// #rows by 3 from a JSON array of [x, y, z] rows [mm], in metres; nullopt when it is not that shape.
+/// A sample array of a study ([mm], sample_rows) in metres; nullopt when it is not one.
 std::optional<Eigen::MatrixXd> rows_in_metres(const json& rows) {
-  if (!rows.is_array()) return std::nullopt;
-  Eigen::MatrixXd m(static_cast<Eigen::Index>(rows.size()), 3);
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    if (!rows[i].is_array() || rows[i].size() != 3) return std::nullopt;
-    for (std::size_t k = 0; k < 3; ++k) {
-      if (!rows[i][k].is_number()) return std::nullopt;
-      m(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(k)) = rows[i][k].get<double>() * 1e-3;
-    }
-  }
+  std::optional<Eigen::MatrixXd> m = sample_rows(rows);
+  if (m) *m *= 1e-3;
   return m;
 }
 
@@ -41,12 +34,6 @@ std::string resolve_config(const std::string& recorded) {
   if (std::filesystem::path(recorded).is_relative() && std::filesystem::exists(in_tree)) return in_tree.string();
   return {};
 }
-
-/// One solved mesh of a study: its size and samples.
-struct FamilyMesh {
-  double size_mm;
-  Eigen::MatrixXd samples;
-};
 
 }  // namespace
 
@@ -62,7 +49,7 @@ MeshFamily read_mesh_family(const std::vector<std::string>& files, const core::C
   if (files.empty()) throw MeshFamilyError("--reference-family: no study given");
   MeshFamily family;
   family.files = files;
-  std::vector<std::vector<FamilyMesh>> levels;  // by nominal size
+  std::vector<std::vector<Eigen::MatrixXd>> levels;  // each mesh's samples [m], by nominal size
   for (std::size_t f = 0; f < files.size(); ++f) {
     const std::string& file = files[f];
     const auto fail = [&](const std::string& what) { throw MeshFamilyError(file + ": " + what); };
@@ -132,16 +119,16 @@ MeshFamily read_mesh_family(const std::vector<std::string>& files, const core::C
         std::size_t nearest = 0;
         for (std::size_t k = 1; k < family.h_mm.size(); ++k)
           if (std::abs(std::log(size / family.h_mm[k])) < std::abs(std::log(size / family.h_mm[nearest]))) nearest = k;
-        if (family.h_mm.empty() || std::abs(size / family.h_mm[nearest] - 1.0) > kFamilyLevelTolerance)
+        if (std::abs(size / family.h_mm[nearest] - 1.0) > kFamilyLevelTolerance)
           fail(fmt::format("{}: a mesh of {} mm lies more than {:.0f} % from every level of {} ({} mm)", level_at, size,
                            100 * kFamilyLevelTolerance, files.front(), fmt::join(family.h_mm, ", ")));
-        levels[nearest].push_back({size, *u});
+        levels[nearest].push_back(*u);
       }
     }
   }
   for (const auto& level : levels) {
     Eigen::MatrixXd mean = Eigen::MatrixXd::Zero(family.sample_points.rows(), 3);
-    for (const FamilyMesh& m : level) mean += m.samples / static_cast<double>(level.size());
+    for (const Eigen::MatrixXd& u : level) mean += u / static_cast<double>(level.size());
     family.means.push_back(mean);
     family.meshes.push_back(static_cast<int>(level.size()));
   }

@@ -58,6 +58,26 @@ std::string resolve_case(const core::JsonReader& r, const std::string& key, cons
   return p.string();
 }
 
+/// The optional array `key` of paths of the plan, each relative to the plan's folder, resolved; empty when absent.
+/// `items` and `item` name what they are in the errors ("sweep folders", "a sweep folder"); `must_exist` refuses a
+/// path that does not exist (a missing cloud study is reported by the table instead, experiments/studies/cloud_change.hpp).
+std::vector<std::string> plan_paths(const core::JsonReader& t, const std::string& key, const std::string& plan_file,
+                                    const std::string& items, const std::string& item, bool must_exist) {
+  std::vector<std::string> paths;
+  if (!t.has(key)) return paths;
+  const json& array = t.array(key, 1, fmt::format("a non-empty array of {} relative to the plan", items));
+  for (std::size_t k = 0; k < array.size(); ++k) {
+    const std::string at = fmt::format("{}/{}", key, k);
+    if (!array[k].is_string() || array[k].get<std::string>().empty())
+      t.fail(at, fmt::format("{} (a string, relative to the plan's folder)", item));
+    const std::string path = relative_to_plan(plan_file, array[k].get<std::string>()).string();
+    if (must_exist && !std::filesystem::exists(path))
+      t.fail(at, fmt::format("an existing {} ({} does not exist)", item.substr(item.find(' ') + 1), path));
+    paths.push_back(path);
+  }
+  return paths;
+}
+
 std::string number_or_dash(const json& v, const char* format) {
   return v.is_number() ? fmt::format(fmt::runtime(format), v.get<double>()) : std::string("–");
 }
@@ -597,26 +617,9 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
     row.paper_enrichment_mm = paper.in_range("enrichment_mm", 0.0, 1e3, true, true);
     row.paper_visibility_mm = paper.in_range("visibility_mm", 0.0, 1e3, true, true);
     paper.finish();
-    if (t.has("cloud_studies")) {
-      const json& studies = t.array("cloud_studies", 1, "a non-empty array of sweep folders relative to the plan");
-      for (std::size_t k = 0; k < studies.size(); ++k) {
-        if (!studies[k].is_string() || studies[k].get<std::string>().empty())
-          t.fail(fmt::format("cloud_studies/{}", k), "a sweep folder (a string, relative to the plan's folder)");
-        row.cloud_studies.push_back(relative_to_plan(file, studies[k].get<std::string>()).string());
-      }
-    }
-    if (t.has("reference_family")) {
-      const json& studies =
-          t.array("reference_family", 1, "a non-empty array of fem.json files of `tissue verify fem`, relative to the plan");
-      for (std::size_t k = 0; k < studies.size(); ++k) {
-        if (!studies[k].is_string() || studies[k].get<std::string>().empty())
-          t.fail(fmt::format("reference_family/{}", k), "a fem.json file (a string, relative to the plan's folder)");
-        const std::string study = relative_to_plan(file, studies[k].get<std::string>()).string();
-        if (!std::filesystem::exists(study))
-          t.fail(fmt::format("reference_family/{}", k), fmt::format("an existing fem.json ({} does not exist)", study));
-        row.reference_family.push_back(study);
-      }
-    }
+    row.cloud_studies = plan_paths(t, "cloud_studies", file, "sweep folders", "a sweep folder", false);
+    row.reference_family =
+        plan_paths(t, "reference_family", file, "fem.json files of `tissue verify fem`", "a fem.json file", true);
     t.finish();
     for (const auto& other : plan.table1)
       if (other.label == row.label) t.fail("label", "a label no other Table 1 case has");
