@@ -1,10 +1,10 @@
-// An unseen organ, held two ways (issue: a regular support). configs/lung_stl_middle_lobe.json holds the real
-// middle lobe of a right lung within 35 mm of a medial point by the shipped lung cases' elastic support and presses
-// it with 0.3 N on its lateral side. The same region clamped makes its edge a Dirichlet-free transition whose strain
-// is singular (about r^-1/2), so with k = 1 the law's admissible range (1 + 2k lambda > 0) is left there first, below
-// the load a surgeon applies. The elastic support carries the whole load, and its smallest margin is no longer at
-// the support. FEM reference only; label long (about 3 minutes on 2 cores). Skipped when ../shared/data/lung is
-// absent.
+// An unseen organ, held two ways (docs/MATERIAL.md §3.1, what the clamp costs). configs/lung_stl_middle_lobe.json
+// holds the real middle lobe of a right lung within 35 mm of a medial point by the shipped lung cases' elastic
+// support and presses it with 0.3 N on its lateral side. The same region clamped makes its edge a Dirichlet-free
+// transition whose strain is singular (about r^-1/2), so with k = 1 the law's admissible range (1 + 2k lambda > 0)
+// is left there first, below the load a surgeon applies. The elastic support carries the whole load, and its
+// smallest margin is no longer at the support. FEM reference only; label long (about 3 minutes on 2 cores).
+// Skipped when ../shared/data/lung is absent.
 #include <gtest/gtest.h>
 
 #include <cmath>
