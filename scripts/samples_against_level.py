@@ -13,7 +13,7 @@ import csv
 
 import numpy as np
 
-from mesh_study_io import read_study, solved
+from mesh_study_io import read_study, rms, solved
 
 
 def main():
@@ -36,7 +36,7 @@ def main():
     d = u - v
     print(f"{a.case} at {a.size_mm:g} mm ({level.get('n_dofs', '?')} DOFs in the study, {level.get('seconds', 0):.0f} s "
           f"there): relative {np.linalg.norm(d) / np.linalg.norm(v):.3g}, RMS per sample "
-          f"{np.linalg.norm(d) / np.sqrt(len(v)):.3g} mm, largest component {np.abs(d).max():.3g} mm")
+          f"{rms(d):.3g} mm, largest component {np.abs(d).max():.3g} mm")
 
 
 if __name__ == "__main__":
