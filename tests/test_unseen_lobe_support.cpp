@@ -47,10 +47,11 @@ TEST(UnseenLobeSupport, TheClampStopsAtItsEdgeBelowTheLoadWhileTheElasticSupport
   const double edge_depth_mm = clamped.fixed_region.depth_inside(clamp_stop->point()) * 1e3;
   std::cout << "clamp: stopped at t = " << clamp_stop->time() << " s, " << edge_depth_mm
             << " mm inside the region's edge, principal strain " << clamp_stop->principal_strain() << "\n";
-  // Measured: t = 0.8 s (the ramp at 0.24 N), 0.01 mm from the edge of the 35 mm region, strain -0.609.
+  // Measured: t = 0.8 s (the ramp at 0.24 N), 0.009 mm from the edge of the 35 mm region (the mesh there is about
+  // 5 mm), strain -0.609004. The strain is read from a Newton iterate that left the range, so it keeps 1e-4.
   EXPECT_NEAR(clamp_stop->time(), 0.8, 1e-9);
-  EXPECT_LT(std::abs(edge_depth_mm), 0.5);
-  EXPECT_NEAR(clamp_stop->principal_strain(), -0.609, 0.005);
+  EXPECT_LT(std::abs(edge_depth_mm), 0.05);
+  EXPECT_NEAR(clamp_stop->principal_strain(), -0.609004, 1e-4);
 
   const reference_fem::FemRunResult r = reference_fem::run_case(elastic, g);
   ASSERT_EQ(r.steps.size(), static_cast<std::size_t>(elastic.time.steps));
@@ -59,9 +60,10 @@ TEST(UnseenLobeSupport, TheClampStopsAtItsEdgeBelowTheLoadWhileTheElasticSupport
   std::cout << "elastic support: 0.3 N carried, largest sample displacement " << peak_mm
             << " mm, smallest 1 + 2k lambda " << r.smallest_margin.margin << " at " << -margin_depth_mm
             << " mm outside the region\n";
-  // Measured: 23.489 mm; the smallest margin 0.587, under the probe, 62 mm outside the support.
-  EXPECT_NEAR(peak_mm, 23.489, 0.01);
-  EXPECT_NEAR(r.smallest_margin.margin, 0.587, 0.005);
+  // Measured: 23.4890 mm; the smallest margin 0.587114, under the probe, 62 mm outside the support. Converged
+  // states: the tolerances leave room for another CPU's rounding (about 1e-5 relative), not for another solution.
+  EXPECT_NEAR(peak_mm, 23.4890, 2e-4);
+  EXPECT_NEAR(r.smallest_margin.margin, 0.587114, 1e-5);
   EXPECT_LT(margin_depth_mm, -50.0);
 }
 
