@@ -549,6 +549,42 @@ TEST(EfgLinearSolvers, BlockedEstimateMatchesTheFullAnalysis) {
   EXPECT_LT(blocked.factorisation_flops, 4.0 * full.factorisation_flops);
 }
 
+TEST(MumpsLu, OrdersTheGraphOfTheBlocks) {
+  // A 27-point stencil of 3 x 3 blocks on a 10^3 grid (the pattern a meshless cloud's node pairs make), its values
+  // a diagonally dominant symmetric matrix: with block_size 3 MUMPS orders the 1,000 nodes instead of the 3,000
+  // unknowns, and solves the same system.
+  const UmfpackMatrix pattern = grid_pattern(10, 3);
+  SparseMatrix a(pattern.rows(), pattern.cols());
+  std::vector<Eigen::Triplet<double>> entries;
+  for (Eigen::Index i = 0; i < pattern.outerSize(); ++i)
+    for (UmfpackMatrix::InnerIterator it(pattern, i); it; ++it) {
+      const long r = it.row(), c = it.col();
+      entries.emplace_back(r, c, r == c ? 60.0 : -1.0 / (1.0 + static_cast<double>((r * 7 + c * 7) % 5)));
+    }
+  a.setFromTriplets(entries.begin(), entries.end());
+  const Eigen::VectorXd x = Eigen::VectorXd::LinSpaced(a.rows(), -1.0, 2.0);
+  const Eigen::VectorXd b = a * x;
+  MumpsLu unknowns("unknowns' graph"), nodes("node graph", 0.0, false, 3);
+  unknowns.factorise(a);
+  nodes.factorise(a);
+  EXPECT_LT((unknowns.solve(b) - x).norm(), 1e-13 * x.norm());
+  EXPECT_LT((nodes.solve(b) - x).norm(), 1e-13 * x.norm());
+  std::cout << "10^3 grid of 3 x 3 blocks: " << unknowns.factorisation_flops() / 1e9 << " Gflop ordering the unknowns, "
+            << nodes.factorisation_flops() / 1e9 << " Gflop ordering the nodes\n";
+  // 0.505 against 0.579 Gflop (0.87x) when this was written; METIS is deterministic.
+  EXPECT_LT(nodes.factorisation_flops(), 0.9 * unknowns.factorisation_flops());
+  // An order that is no multiple of the block size is refused before MUMPS sees it; so is a block size below 1.
+  MumpsLu pairs("pairs", 0.0, false, 2);
+  try {
+    pairs.factorise(small_unsymmetric_matrix().block(0, 0, 3, 3));
+    ADD_FAILURE() << "a 3 x 3 matrix was factorised in blocks of 2";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("the matrix order 3 is not a multiple of the block size 2"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(MumpsLu("none", 0.0, false, 0), std::invalid_argument);
+}
+
 TEST(EfgLinearSolvers, EstimateRejectsAnUncompressedMatrix) {
   UmfpackMatrix a(3, 3);
   a.insert(0, 0) = 1.0;  // insert leaves the matrix uncompressed

@@ -111,7 +111,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
   }
   switch (kind_) {
     case LinearSolverKind::direct:
-      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance, options.direct_symmetric_part);
+      // Three unknowns per node, a dense 3 x 3 block per node pair (NodalSparsity): MUMPS orders the node graph.
+      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance, options.direct_symmetric_part, 3);
       break;
     case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
     case LinearSolverKind::petsc_krylov:
@@ -145,10 +146,10 @@ std::string EfgLinearSolver::description() const {
   switch (kind_) {
     case LinearSolverKind::direct:
       return options_.direct_low_rank_tolerance > 0.0
-                 ? fmt::format("MUMPS block low-rank LU (METIS ordering, tolerance {:g})",
+                 ? fmt::format("MUMPS block low-rank LU (METIS ordering of the node graph, tolerance {:g})",
                                options_.direct_low_rank_tolerance)
-                 : options_.direct_symmetric_part ? std::string("MUMPS LDL^T of the symmetric part (METIS ordering)")
-                                                  : std::string("MUMPS sparse LU (METIS ordering)");
+                 : options_.direct_symmetric_part ? std::string("MUMPS LDL^T of the symmetric part (METIS ordering of the node graph)")
+                                                  : std::string("MUMPS sparse LU (METIS ordering of the node graph)");
     case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
     case LinearSolverKind::petsc_krylov: return krylov_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";

@@ -74,7 +74,7 @@ class EfgLinearSolver {
   std::pair<int, int> nodes_read(int num_nodes) const;
   /// Seconds of the last prepare() (factorisation, or the preconditioner's set-up).
   double prepare_seconds() const { return prepare_seconds_; }
-  /// The method, for reports ("MUMPS sparse LU (METIS ordering)", "PETSc lgmres + eisenstat", ...).
+  /// The method, for reports ("MUMPS sparse LU (METIS ordering of the node graph)", "PETSc lgmres + eisenstat", ...).
   std::string description() const;
   /// The estimate and the budget the automatic choice compared [bytes, flops]; 0 when the method was set
   /// explicitly.

@@ -79,11 +79,15 @@ struct MumpsLu::Mumps {
   }
 };
 
-MumpsLu::MumpsLu(std::string name, double low_rank_tolerance, bool symmetric_part)
-    : mumps_(std::make_unique<Mumps>()), name_(std::move(name)), symmetric_part_(symmetric_part) {
+MumpsLu::MumpsLu(std::string name, double low_rank_tolerance, bool symmetric_part, int block_size)
+    : mumps_(std::make_unique<Mumps>()), name_(std::move(name)), symmetric_part_(symmetric_part),
+      block_size_(block_size) {
   if (!(low_rank_tolerance >= 0.0))
     throw std::invalid_argument(
         fmt::format("MumpsLu '{}': the low-rank tolerance must be >= 0 (0: exact LU), got {}", name_, low_rank_tolerance));
+  if (block_size < 1)
+    throw std::invalid_argument(
+        fmt::format("MumpsLu '{}': the block size must be >= 1 (1: no blocks), got {}", name_, block_size));
   int mpi_initialised = 0, mpi_finalized = 0;
   MPI_Initialized(&mpi_initialised);
   MPI_Finalized(&mpi_finalized);
@@ -108,6 +112,8 @@ MumpsLu::MumpsLu(std::string name, double low_rank_tolerance, bool symmetric_par
   icntl(id, 3) = -1;
   icntl(id, 4) = 0;
   icntl(id, 7) = kOrderingMetis;  // nested dissection: the point of using MUMPS here (header)
+  // The graph of the blocks (the nodes) rather than of the unknowns: a better nested dissection, and a cheaper one.
+  if (block_size > 1) icntl(id, 15) = -block_size;
   // Null-pivot detection: without it MUMPS factorises a singular matrix without a word (a body without enough
   // clamped surface, a node that no point supports). A pivot is null below 1e-5 eps ||A|| (CNTL(3) = 0).
   icntl(id, 24) = 1;
@@ -125,6 +131,9 @@ void MumpsLu::factorise(const SparseMatrix& a) {
   if (a.rows() != a.cols())
     throw std::invalid_argument(fmt::format("MumpsLu::factorise: expected a square matrix, got {} x {}", a.rows(),
                                             a.cols()));
+  if (a.rows() % block_size_ != 0)
+    throw std::invalid_argument(fmt::format("MumpsLu '{}': the matrix order {} is not a multiple of the block size {}",
+                                            name_, a.rows(), block_size_));
   const bool first = !m.analysed;
   if (first) {
     m.rows.clear();
