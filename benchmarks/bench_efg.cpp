@@ -10,7 +10,9 @@
 //  * BM_EfgDirectLung/mumps, /umfpack: one factorisation of configs/lung_small.json's tangent at its shipped
 //    resolution (10 mm cloud) by each direct solver, in one run: the solver behind every lung solve; /mumps_blr_*: MUMPS's
 //    block low-rank LU at dropping tolerances 1e-8, 1e-6 and 1e-4 (EfgOptions::direct_low_rank_tolerance), with the
-//    relative residual of its solve (the exact LU's is round-off);
+//    relative residual of its solve (the exact LU's is round-off); /mumps_unknowns_graph: MUMPS ordering the graph of
+//    the unknowns instead of the nodes' (EfgOptions::direct_node_ordering = false, as before); each with the
+//    factorisation's operations (factorisation_Gflop);
 //  * BM_EfgLungRunRefreshRule/2, /5: lung_small's whole run with EfgOptions::refactor_contraction 0.2 (before) and
 //    0.5 (the default);
 //  * BM_EfgPreconditioner: the preconditioners measured before choosing the default of EfgOptions::krylov_options
@@ -207,11 +209,14 @@ meshless::EfgModel& assembled_lung_small() {
 }
 
 /// One factorisation (with its ordering) and one back-substitution of the lung tangent.
-void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind, double low_rank_tolerance) {
+void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind, double low_rank_tolerance,
+                      bool node_ordering = true) {
   meshless::EfgModel& model = assembled_lung_small();
   meshless::EfgOptions options;
   options.linear_solver = kind;
   options.direct_low_rank_tolerance = low_rank_tolerance;
+  options.direct_node_ordering = node_ordering;
+  double flops = 0.0;
   double solve_seconds = 0.0, relative_residual = 0.0;
   std::string label;
   const Eigen::VectorXd rhs = Eigen::VectorXd::Ones(model.system_matrix().rows());
@@ -223,7 +228,9 @@ void BM_EfgDirectLung(benchmark::State& state, LinearSolverKind kind, double low
     solve_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     relative_residual = (model.system_matrix() * x - rhs).norm() / rhs.norm();
     label = solver.description();
+    flops = solver.factorisation_flops();
   }
+  state.counters["factorisation_Gflop"] = flops / 1e9;
   state.counters["relative_residual"] = relative_residual;
   state.counters["nodes"] = model.statistics().num_nodes;
   state.counters["nnz"] = static_cast<double>(model.statistics().matrix_nonzeros);
@@ -311,6 +318,9 @@ BENCHMARK(BM_EfgSolveMlGcr)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kSecond)
 BENCHMARK(BM_EfgSolveMumps)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK(BM_EfgSolveUmfpack)->Arg(13)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps, LinearSolverKind::direct, 0.0)->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_unknowns_graph, LinearSolverKind::direct, 0.0, false)
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-8, LinearSolverKind::direct, 1e-8)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-6, LinearSolverKind::direct, 1e-6)->Unit(benchmark::kSecond)->Iterations(1);
 BENCHMARK_CAPTURE(BM_EfgDirectLung, mumps_blr_1e-4, LinearSolverKind::direct, 1e-4)->Unit(benchmark::kSecond)->Iterations(1);

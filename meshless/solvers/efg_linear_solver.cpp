@@ -112,7 +112,8 @@ EfgLinearSolver::EfgLinearSolver(const EfgOptions& options, const NodalSparsity&
   switch (kind_) {
     case LinearSolverKind::direct:
       // Three unknowns per node, a dense 3 x 3 block per node pair (NodalSparsity): MUMPS orders the node graph.
-      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance, options.direct_symmetric_part, 3);
+      mumps_ = std::make_unique<MumpsLu>(name_, options.direct_low_rank_tolerance, options.direct_symmetric_part,
+                                         options.direct_node_ordering ? 3 : 1);
       break;
     case LinearSolverKind::direct_umfpack: umfpack_ = std::make_unique<Umfpack>(); break;
     case LinearSolverKind::petsc_krylov:
@@ -142,14 +143,17 @@ std::pair<int, int> EfgLinearSolver::nodes_read(int num_nodes) const {
   return krylov_ ? krylov_->owned_nodes() : std::pair<int, int>{0, num_nodes};
 }
 
+double EfgLinearSolver::factorisation_flops() const { return mumps_ ? mumps_->factorisation_flops() : 0.0; }
+
 std::string EfgLinearSolver::description() const {
   switch (kind_) {
     case LinearSolverKind::direct:
       return options_.direct_low_rank_tolerance > 0.0
-                 ? fmt::format("MUMPS block low-rank LU (METIS ordering of the node graph, tolerance {:g})",
-                               options_.direct_low_rank_tolerance)
-                 : options_.direct_symmetric_part ? std::string("MUMPS LDL^T of the symmetric part (METIS ordering of the node graph)")
-                                                  : std::string("MUMPS sparse LU (METIS ordering of the node graph)");
+                 ? fmt::format("MUMPS block low-rank LU (METIS ordering of the {} graph, tolerance {:g})",
+                               options_.direct_node_ordering ? "node" : "unknowns'", options_.direct_low_rank_tolerance)
+                 : fmt::format("MUMPS {} (METIS ordering of the {} graph)",
+                               options_.direct_symmetric_part ? "LDL^T of the symmetric part" : "sparse LU",
+                               options_.direct_node_ordering ? "node" : "unknowns'");
     case LinearSolverKind::direct_umfpack: return "UMFPACK (Eigen::UmfPackLU)";
     case LinearSolverKind::petsc_krylov: return krylov_->description();
     case LinearSolverKind::jacobi_bicgstab: return "BiCGSTAB (Jacobi preconditioner)";

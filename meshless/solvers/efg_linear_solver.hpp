@@ -80,6 +80,9 @@ class EfgLinearSolver {
   /// explicitly.
   double direct_peak_memory_estimate() const { return peak_memory_estimate_; }
   double direct_flops_estimate() const { return flops_estimate_; }
+  /// Floating-point operations of the direct solver's last factorisation (MUMPS RINFOG(3)); 0 for the other methods
+  /// and before the first.
+  double factorisation_flops() const;
   double available_memory_bytes() const { return available_memory_; }
 
  private:
