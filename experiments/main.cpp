@@ -27,15 +27,18 @@ int main(int argc, char** argv) {
   core::use_supported_openblas_kernel(argv);
   // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's PETSc Krylov
   // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
-  // `solve fem` and `solve meshless` are distributed: other commands would run N copies side by side.
+  // `solve fem`, `solve meshless` and `verify fem` are distributed: other commands would run N copies side by side.
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
   const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   if (dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD) > 1) {
-    if (!(argc > 2 && std::strcmp(argv[1], "solve") == 0 &&
-          (std::strcmp(argv[2], "fem") == 0 || std::strcmp(argv[2], "meshless") == 0))) {
+    const bool distributed =
+        argc > 2 && ((std::strcmp(argv[1], "solve") == 0 &&
+                      (std::strcmp(argv[2], "fem") == 0 || std::strcmp(argv[2], "meshless") == 0)) ||
+                     (std::strcmp(argv[1], "verify") == 0 && std::strcmp(argv[2], "fem") == 0));
+    if (!distributed) {
       if (root)
-        std::cerr << "error: only `tissue solve fem` and `tissue solve meshless` run under mpirun with more than one "
-                     "process\n";
+        std::cerr << "error: only `tissue solve fem`, `tissue solve meshless` and `tissue verify fem` run under mpirun "
+                     "with more than one process\n";
       return 2;
     }
     // The EFG model's OpenMP loops (assembly, shape functions) get this process's share of the cores too.

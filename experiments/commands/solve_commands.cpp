@@ -17,6 +17,7 @@
 #include "experiments/models/model_registry.hpp"
 #include "experiments/models/fem/fem_reference_model.hpp"
 #include "experiments/io/progress.hpp"
+#include "experiments/io/rank_zero_output.hpp"
 #include "reference_fem/fem_model.hpp"
 #include "core/geometry_broadcast.hpp"
 
@@ -50,25 +51,6 @@ core::Geometry build_timed_geometry(const core::Case& c, bool fem, Progress* pro
   core::Geometry g = core::build_geometry(c, options);
   *seconds = progress->elapsed_seconds() - t0;
   return g;
-}
-
-/// Rank 0 stages the results folder (core::OutputDirectory); every process learns its path, since each writes
-/// its own VTU pieces there. A failure on rank 0 is thrown on every process. Collective.
-std::unique_ptr<core::OutputDirectory> stage_on_rank_zero(const std::string& out_dir, std::string* staging) {
-  std::unique_ptr<core::OutputDirectory> out;
-  std::string error;
-  if (dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0) {
-    try {
-      out = std::make_unique<core::OutputDirectory>(out_dir);
-      *staging = out->staging().string();
-    } catch (const std::exception& e) {
-      error = fmt::format("cannot create the output folder {}: {}", out_dir, e.what());
-    }
-  }
-  const auto shared = dealii::Utilities::MPI::broadcast(MPI_COMM_WORLD, std::vector<std::string>{*staging, error}, 0);
-  if (!shared[1].empty()) throw std::runtime_error(shared[1]);
-  *staging = shared[0];
-  return out;
 }
 
 int run_solve_fem(const std::string& config, const std::string& out_dir) {

@@ -2,6 +2,7 @@
 
 #include "experiments/comparator/mesh_study_estimate.hpp"
 
+#include <deal.II/base/mpi.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -13,11 +14,13 @@
 #include "core/convergence_rate.hpp"
 #include "core/geometry.hpp"
 #include "core/load_patch_zone.hpp"
+#include "core/geometry_broadcast.hpp"
 #include "core/output_directory.hpp"
 #include "experiments/models/efg/meshless_runs.hpp"
 #include "experiments/models/lrpim/lrpim_case_model.hpp"
 #include "experiments/models/model_result.hpp"
 #include "experiments/io/progress.hpp"
+#include "experiments/io/rank_zero_output.hpp"
 #include "reference_fem/fem_model.hpp"
 #include "reference_fem/verification.hpp"
 
@@ -160,9 +163,12 @@ struct LungLevel {
 
 /// Solve every case at every mesh size, one after the other: Gmsh is a process-wide singleton, and the FEM's
 /// Trilinos objects make MPI calls, which MPI (initialised for one thread at a time) does not allow from
-/// concurrent threads. Each solve assembles with all the cores.
+/// concurrent threads. Each solve assembles with all the cores. Under mpirun, rank 0 meshes each level and every
+/// process solves it with the others (reference_fem/fem_model.hpp), so a level may need more memory than one process
+/// has; every process returns the same levels. Collective over MPI_COMM_WORLD.
 std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& opt, const std::vector<core::Case>& cases,
                                                        Progress* progress) {
+  const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
   std::vector<std::vector<LungLevel>> levels(cases.size());
   for (double h : opt.sizes_mm) {
     for (auto& case_levels : levels) case_levels.push_back(LungLevel{h});
@@ -173,7 +179,8 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
         core::GeometryOptions g_options;
         g_options.fem_mesh_size = size * 1e-3;
         g_options.build_node_cloud = false;
-        geometries.push_back(core::build_geometry(c, g_options));
+        geometries.push_back(core::build_on_rank_zero([&] { return core::build_geometry(c, g_options); },
+                                                      MPI_COMM_WORLD));
       }
       for (std::size_t i = 0; i < cases.size(); ++i) {
         LungLevel& level = levels[i].back();
@@ -183,8 +190,9 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
         }
         if (!level.error.empty()) continue;  // a mesh of this level failed: the level has no mean
         try {
-          reference_fem::FemRunResult r = reference_fem::run_case(cases[i], geometries[i]);
-          std::cerr << fmt::format("  {} at {} mm: {} DOFs, max sample |u| {:.4f} mm, {:.1f} s\n", cases[i].name, size,
+          reference_fem::FemRunResult r = reference_fem::run_case(cases[i], geometries[i]);  // on MPI_COMM_WORLD
+          if (root)
+            std::cerr << fmt::format("  {} at {} mm: {} DOFs, max sample |u| {:.4f} mm, {:.1f} s\n", cases[i].name, size,
                                    r.n_dofs, r.sample_displacements.rowwise().norm().maxCoeff() * 1e3, r.total_seconds);
           level.mesh_sizes_mm.push_back(size);
           level.mesh_samples.push_back(r.sample_displacements);
@@ -192,7 +200,7 @@ std::vector<std::vector<LungLevel>> solve_lung_levels(const VerifyFemOptions& op
           if (level.mesh_sizes_mm.size() == 1) level.run = std::move(r);
         } catch (const std::exception& e) {  // recorded in fem.json; the other cases and levels go on
           level.error = opt.meshes_per_level > 1 ? fmt::format("at {} mm: {}", size, e.what()) : e.what();
-          std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, size, e.what());
+          if (root) std::cerr << fmt::format("  {} at {} mm FAILED: {}\n", cases[i].name, size, e.what());
         }
       }
     }
@@ -279,6 +287,7 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
                     {"support_edge_strain_peak", r.support_edge_strain.peak},
                     {"support_edge_band_mm", reference_fem::kSupportEdgeBand * 1e3},
                     {"seconds", level.seconds},
+                    {"mpi_processes", r.mpi_processes},
                     // The smallest 1 + 2k lambda of the converged states, and where: below the law's slope floor the
                     // law was continued there (docs/MATERIAL.md §1.7).
                     {"min_one_plus_2k_lambda", r.smallest_margin.margin},
@@ -370,10 +379,14 @@ nlohmann::json summarize_lung(const VerifyFemOptions& opt, const std::string& co
 }
 
 int run_verify_fem(const VerifyFemOptions& opt) {
+  // Under mpirun every process runs this function: each solves the small closed-form problems alone (they take
+  // seconds), all of them solve the lung levels together, and rank 0 meshes, prints and writes.
+  const bool root = dealii::Utilities::MPI::this_mpi_process(MPI_COMM_WORLD) == 0;
+  const unsigned int n_processes = dealii::Utilities::MPI::n_mpi_processes(MPI_COMM_WORLD);
   const int lung_steps =
       opt.skip_lung ? 0 : static_cast<int>(opt.configs.size() * opt.sizes_mm.size()) * opt.meshes_per_level;
-  Progress progress("verify fem", 1 + static_cast<int>(opt.cantilever_levels.size()) + lung_steps);
-  core::OutputDirectory out(opt.out);
+  Progress progress("verify fem", 1 + static_cast<int>(opt.cantilever_levels.size()) + lung_steps, !root);
+  const std::unique_ptr<core::OutputDirectory> out = stage_on_rank_zero(opt.out);
   std::string md = "# FEM reference verification (`tissue verify fem`)\n\n";
   nlohmann::json j;
   progress.step("uniaxial relaxation and creep");
@@ -383,6 +396,10 @@ int run_verify_fem(const VerifyFemOptions& opt) {
     std::vector<core::Case> cases;
     for (const auto& config : opt.configs) cases.push_back(core::load_case(config));
     const auto levels = solve_lung_levels(opt, cases, &progress);
+    if (!root) return 0;  // rank 0 summarises and writes
+    if (n_processes > 1)
+      md += fmt::format("The lung levels were solved on {} MPI processes (mpirun), each mesh built by rank 0.\n\n",
+                        n_processes);
     nlohmann::json lung = nlohmann::json::object();
     for (std::size_t i = 0; i < cases.size(); ++i)
       lung[cases[i].name] = summarize_lung(opt, opt.configs[i], cases[i], levels[i], &md);
@@ -399,9 +416,10 @@ int run_verify_fem(const VerifyFemOptions& opt) {
     }
     j["reference_mesh_size_mm"] = size;
   }
-  write_text_file(out.file("fem.json").string(), j.dump(2) + "\n");
-  write_text_file(out.file("fem.md").string(), md);
-  out.commit();
+  if (!root) return 0;  // --skip-lung: rank 0 writes
+  write_text_file(out->file("fem.json").string(), j.dump(2) + "\n");
+  write_text_file(out->file("fem.md").string(), md);
+  out->commit();
   progress.done();
   std::cout << md;
   return 0;
@@ -414,7 +432,8 @@ void add_verify_commands(CLI::App& app) {
   group->require_subcommand(1);
   auto* fem = group->add_subcommand("fem", "The FEM reference: closed forms, cantilever rate, lung mesh convergence");
   fem->footer("Uniaxial relaxation and creep against their closed forms, the Timoshenko cantilever's L2 rate and the lung\n"
-              "mesh convergence study (the reference's error bar for compare); writes fem.json and fem.md.");
+              "mesh convergence study (the reference's error bar for compare); writes fem.json and fem.md. Under\n"
+              "`mpirun -np N` every lung level is solved by the N processes together (docs/FEM_REFERENCE.md).");
   static VerifyFemOptions opt;
   fem->add_option("--out", opt.out, "Output folder (written atomically)")->capture_default_str();
   fem->add_option("--config", opt.configs, "Load cases for the mesh-convergence study")->capture_default_str();
