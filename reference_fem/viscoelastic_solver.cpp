@@ -215,13 +215,19 @@ void ViscoelasticSolver::setup_system() {
   amg_.reset();
   factorization_.reset();
   rebuild_ = true;
-  if (parameters_.newton.linear.type == LinearSolverType::direct) {
-    direct_pattern_.copy_from(dsp);  // one process: the whole pattern
-    direct_matrix_.reinit(direct_pattern_);
-  } else {
+  serial_ = Utilities::MPI::n_mpi_processes(mpi_communicator_) == 1;
+  serial_copy_.reset();
+  if (serial_) {
+    serial_pattern_.copy_from(dsp);  // one process: the whole pattern
+    serial_matrix_.reinit(serial_pattern_);
+    serial_copy_ = std::make_unique<SerialMatrixCopy>(serial_pattern_, system_matrix_);
+    serial_rhs_.reinit(dof_handler_.n_dofs());
+    serial_external_.reinit(dof_handler_.n_dofs());
+    serial_internal_.reinit(dof_handler_.n_dofs());
+  }
+  if (parameters_.newton.linear.type != LinearSolverType::direct)
     rigid_body_modes_ = rigid_body_modes(dof_handler_, mapping_, locally_owned_dofs_,
                                          system_matrix_.trilinos_matrix().DomainMap());
-  }
 
   n_q_points_ = QGaussSimplex<3>(static_cast<unsigned int>(parameters_.degree + 1)).size();
   history_.assign(static_cast<std::size_t>(triangulation_.n_active_cells()) * n_q_points_, PointHistory{});
@@ -334,33 +340,56 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
   TimerOutput::Scope scope(timer_, "assembly");
   step_time_ = t_new;
   step_dt_ = dt;
-  system_matrix_ = 0.0;
-  system_rhs_ = 0.0;
-  TrilinosWrappers::MPI::Vector external(locally_owned_dofs_, mpi_communicator_);
-  TrilinosWrappers::MPI::Vector internal(locally_owned_dofs_, mpi_communicator_);
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
   iterate_margin_ = core::SmallestMargin{};
-  // Locally owned cells only; rows owned by another process are sent to it by compress().
-  WorkStream::run(
-      first_owned(dof_handler_), end_owned(dof_handler_),
-      [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
-        local_assemble(cell, s, c);
-      },
-      [this, &external, &internal](const CopyData& c) {
-        iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
-        internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
-        zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, system_matrix_,
-                                                     system_rhs_);
-        zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
-      },
-      scratch, CopyData());
-  system_matrix_.compress(VectorOperation::add);
-  system_rhs_.compress(VectorOperation::add);
-  external.compress(VectorOperation::add);
-  internal.compress(VectorOperation::add);
-  external_force_norm_ = external.l2_norm();
-  internal_force_norm_ = internal.l2_norm();
+  const auto local = [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
+    local_assemble(cell, s, c);
+  };
+  if (serial_) {
+    serial_matrix_ = 0.0;
+    serial_rhs_ = 0.0;
+    serial_external_ = 0.0;
+    serial_internal_ = 0.0;
+    WorkStream::run(
+        first_owned(dof_handler_), end_owned(dof_handler_), local,  // one process: every cell
+        [this](const CopyData& c) {
+          iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
+          for (unsigned int i = 0; i < c.local_dof_indices.size(); ++i)  // all rows: includes the reactions
+            serial_internal_(c.local_dof_indices[i]) += c.cell_internal(i);
+          zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, serial_matrix_,
+                                                       serial_rhs_);
+          zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, serial_external_);
+        },
+        scratch, CopyData());
+    serial_copy_->copy(serial_matrix_, &system_matrix_);
+    for (types::global_dof_index i = 0; i < serial_rhs_.size(); ++i) system_rhs_[i] = serial_rhs_(i);
+    system_rhs_.compress(VectorOperation::insert);
+    external_force_norm_ = serial_external_.l2_norm();
+    internal_force_norm_ = serial_internal_.l2_norm();
+  } else {
+    system_matrix_ = 0.0;
+    system_rhs_ = 0.0;
+    TrilinosWrappers::MPI::Vector external(locally_owned_dofs_, mpi_communicator_);
+    TrilinosWrappers::MPI::Vector internal(locally_owned_dofs_, mpi_communicator_);
+    // Locally owned cells only; rows owned by another process are sent to it by compress().
+    WorkStream::run(
+        first_owned(dof_handler_), end_owned(dof_handler_), local,
+        [this, &external, &internal](const CopyData& c) {
+          iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
+          internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
+          zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, system_matrix_,
+                                                       system_rhs_);
+          zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
+        },
+        scratch, CopyData());
+    system_matrix_.compress(VectorOperation::add);
+    system_rhs_.compress(VectorOperation::add);
+    external.compress(VectorOperation::add);
+    internal.compress(VectorOperation::add);
+    external_force_norm_ = external.l2_norm();
+    internal_force_norm_ = internal.l2_norm();
+  }
   // The same on every process; newton_step() decides what a point past the admissible range means.
   iterate_margin_ = smallest_over_processes(iterate_margin_, mpi_communicator_);
   return system_rhs_.l2_norm();
@@ -370,9 +399,8 @@ void ViscoelasticSolver::build_preconditioner() {
   ++preconditioner_builds_;
   rebuild_ = false;
   if (parameters_.newton.linear.type == LinearSolverType::direct) {
-    direct_matrix_.copy_from(system_matrix_);
     factorization_ = std::make_unique<SparseDirectUMFPACK>();
-    factorization_->initialize(direct_matrix_);
+    factorization_->initialize(serial_matrix_);  // the direct solver runs on one process only (constructor)
     return;
   }
   AmgOptions options;

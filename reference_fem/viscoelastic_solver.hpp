@@ -24,6 +24,7 @@
 #include <deal.II/lac/trilinos_precondition.h>
 #include <deal.II/lac/trilinos_sparse_matrix.h>
 #include <deal.II/lac/trilinos_vector.h>
+#include <deal.II/lac/vector.h>
 
 #include <functional>
 #include <map>
@@ -37,6 +38,7 @@
 #include "core/kelvin_law.hpp"
 #include "reference_fem/point_history.hpp"
 #include "reference_fem/problem.hpp"
+#include "reference_fem/serial_matrix_copy.hpp"
 
 class Epetra_MultiVector;
 
@@ -157,9 +159,15 @@ class ViscoelasticSolver {
   // rebuilt when GMRES slows down, so Newton stays exact at a fraction of the cost.
   std::unique_ptr<dealii::TrilinosWrappers::PreconditionAMG> amg_;   // LinearSolverType::amg
   std::unique_ptr<Epetra_MultiVector> rigid_body_modes_;            // its near null space (6 columns)
-  dealii::SparsityPattern direct_pattern_;                         // LinearSolverType::direct (one process):
-  dealii::SparseMatrix<double> direct_matrix_;                     //   a serial copy of the tangent and
-  std::unique_ptr<dealii::SparseDirectUMFPACK> factorization_;     //   its UMFPACK LU factors
+  std::unique_ptr<dealii::SparseDirectUMFPACK> factorization_;     // LinearSolverType::direct: LU factors of serial_matrix_
+  // One process: the tangent and the residual's vectors are assembled into deal.II objects, which add a cell's rows
+  // faster than Epetra does, and copied into system_matrix_ and system_rhs_ after each assembly (serial_matrix_copy.hpp).
+  // UMFPACK factorises serial_matrix_ itself.
+  bool serial_ = false;
+  dealii::SparsityPattern serial_pattern_;
+  dealii::SparseMatrix<double> serial_matrix_;
+  std::unique_ptr<SerialMatrixCopy> serial_copy_;
+  dealii::Vector<double> serial_rhs_, serial_external_, serial_internal_;
   bool rebuild_ = true;
   int last_linear_iterations_ = 0;
   int preconditioner_builds_ = 0;
