@@ -346,6 +346,13 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
   const auto local = [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
     local_assemble(cell, s, c);
   };
+  // WorkStream's serial stage: one cell's rows into the global objects (deal.II's on one process, Trilinos's else).
+  const auto add_cell = [this](const CopyData& c, auto& matrix, auto& rhs, auto& external, auto& internal) {
+    iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
+    internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
+    zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, matrix, rhs);
+    zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
+  };
   if (serial_) {
     serial_matrix_ = 0.0;
     serial_rhs_ = 0.0;
@@ -353,14 +360,7 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
     serial_internal_ = 0.0;
     WorkStream::run(
         first_owned(dof_handler_), end_owned(dof_handler_), local,  // one process: every cell
-        [this](const CopyData& c) {
-          iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
-          for (unsigned int i = 0; i < c.local_dof_indices.size(); ++i)  // all rows: includes the reactions
-            serial_internal_(c.local_dof_indices[i]) += c.cell_internal(i);
-          zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, serial_matrix_,
-                                                       serial_rhs_);
-          zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, serial_external_);
-        },
+        [&](const CopyData& c) { add_cell(c, serial_matrix_, serial_rhs_, serial_external_, serial_internal_); },
         scratch, CopyData());
     serial_copy_->copy(serial_matrix_, &system_matrix_);
     for (types::global_dof_index i = 0; i < serial_rhs_.size(); ++i) system_rhs_[i] = serial_rhs_(i);
@@ -375,14 +375,8 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
     // Locally owned cells only; rows owned by another process are sent to it by compress().
     WorkStream::run(
         first_owned(dof_handler_), end_owned(dof_handler_), local,
-        [this, &external, &internal](const CopyData& c) {
-          iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
-          internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
-          zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, system_matrix_,
-                                                       system_rhs_);
-          zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
-        },
-        scratch, CopyData());
+        [&](const CopyData& c) { add_cell(c, system_matrix_, system_rhs_, external, internal); }, scratch,
+        CopyData());
     system_matrix_.compress(VectorOperation::add);
     system_rhs_.compress(VectorOperation::add);
     external.compress(VectorOperation::add);
