@@ -11,6 +11,7 @@
 #include <functional>
 #include <vector>
 
+#include "core/mpi_session_directory.hpp"
 #include "core/openblas_kernel.hpp"
 
 namespace bench {
@@ -44,6 +45,7 @@ inline int run_specified_benchmarks_on_every_process(int argc, char** argv) {
 
 inline int run_benchmarks_under_mpi(int argc, char** argv) {
   core::use_supported_openblas_kernel(argv);  // before MPI: it may run the program again
+  const core::SingletonMpiSessionDirectory session_directory;  // outlives MPI
   dealii::Utilities::MPI::MPI_InitFinalize mpi(argc, argv);
   return run_specified_benchmarks_on_every_process(argc, argv);
 }
@@ -56,6 +58,7 @@ inline int run_benchmarks_under_mpi(int argc, char** argv) {
 inline int run_benchmarks_with_petsc(int argc, char** argv, const std::function<void()>& before_finalize = {}) {
   core::use_supported_openblas_kernel(argv);  // before MPI: it may run the program again
   int petsc_argc = 1;
+  const core::SingletonMpiSessionDirectory session_directory;  // outlives MPI
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
   const int code = run_specified_benchmarks_on_every_process(argc, argv);
   if (before_finalize) before_finalize();

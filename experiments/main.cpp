@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "core/case_error.hpp"
+#include "core/mpi_session_directory.hpp"
 #include "core/openblas_kernel.hpp"
 #include "experiments/commands/case_commands.hpp"
 #include "experiments/commands/fit_commands.hpp"
@@ -25,6 +26,9 @@
 int main(int argc, char** argv) {
   // First, before any thread or MPI: OpenBLAS's kernels for this CPU, which may run this program again.
   core::use_supported_openblas_kernel(argv);
+  // Then, for a process not started by mpirun, its own Open MPI session directory, removed after MPI_Finalize: two
+  // `tissue` commands started side by side would otherwise race on the shared one (core/mpi_session_directory.hpp).
+  const core::SingletonMpiSessionDirectory session_directory;
   // MPI and PETSc, finalised when main returns: for the distributed FEM reference and the EFG model's PETSc Krylov
   // solve (docs/MESHLESS.md §2); one thread per core of the node, shared among the processes on it. Only
   // `solve fem`, `solve meshless` and `verify fem` are distributed: other commands would run N copies side by side.

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/mpi_session_directory.hpp"
 #include "meshless/solvers/petsc_krylov_solver.hpp"
 #include "meshless/solvers/anderson_acceleration.hpp"
 #include "meshless/solvers/available_memory.hpp"
@@ -598,6 +599,7 @@ int main(int argc, char** argv) {
   // The Krylov solver runs on PETSc and the direct solver on MUMPS, which need MPI and PETSc initialised; only the
   // program name is passed on, so that PETSc does not read GoogleTest's flags.
   int petsc_argc = 1;
+  const core::SingletonMpiSessionDirectory session_directory;  // outlives MPI: ctest runs suites side by side
   dealii::Utilities::MPI::MPI_InitFinalize mpi(petsc_argc, argv, 1);
   ::testing::InitGoogleTest(&argc, argv);
   return RUN_ALL_TESTS();
