@@ -11,6 +11,7 @@
 
 #include "core/case.hpp"
 #include "core/case_error.hpp"
+#include "experiments/comparator/compare.hpp"
 #include "experiments/studies/cloud_change.hpp"
 #include "experiments/studies/reproduce.hpp"
 
@@ -411,4 +412,30 @@ TEST(ReproducePlan, Table1MarkdownShowsTheConvergedFemColumnAndBothCloudChanges)
   }
   EXPECT_GT(header_cells, 10u);
   EXPECT_EQ(row_cells, header_cells) << md;
+}
+
+// The side-by-side Table 1 hands each child the compare options the cases get in this process: a dropped flag would
+// silently change a case's error bar (--reference-family) or draw plots a --no-plot run does not want.
+TEST(ReproducePlan, TheChildsCompareCommandLineCarriesTheCasesOptions) {
+  experiments::CompareOptions compare;
+  compare.out_dir = "/tmp/out/cutting";
+  compare.plot = false;
+  compare.reference_family = {"/a/fem.json", "/b/fem.json"};
+  EXPECT_EQ(experiments::compare_command_line("/bin/tissue", "/c/lung_large.json", compare),
+            (std::vector<std::string>{"/bin/tissue", "compare", "/c/lung_large.json", "--out", "/tmp/out/cutting",
+                                      "--no-plot", "--reference-family", "/a/fem.json", "--reference-family",
+                                      "/b/fem.json"}));
+  compare.plot = true;
+  compare.reference_family.clear();
+  EXPECT_EQ(experiments::compare_command_line("tissue", "x.json", compare),
+            (std::vector<std::string>{"tissue", "compare", "x.json", "--out", "/tmp/out/cutting"}));
+  // The other options keep compare's defaults, which reproduce does not change: the command line is complete only
+  // while that holds.
+  const experiments::CompareOptions defaults;
+  EXPECT_EQ(defaults.reference_samples, "solved");
+  EXPECT_TRUE(defaults.cut_effect);
+  EXPECT_EQ(defaults.reference_error_file, "results/verify/fem.json");
+  EXPECT_TRUE(defaults.externals.empty());
+  EXPECT_FALSE(defaults.patch_edge_distance.has_value());
+  EXPECT_FALSE(defaults.cut_distance.has_value());
 }

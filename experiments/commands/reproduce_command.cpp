@@ -1,5 +1,6 @@
 #include "experiments/commands/reproduce_command.hpp"
 
+#include "experiments/io/child_process.hpp"
 #include "experiments/io/progress.hpp"
 #include "experiments/studies/reproduce.hpp"
 
@@ -20,10 +21,16 @@ void add_reproduce_command(CLI::App& app) {
   cmd->add_flag("--no-plot", no_plot, "Do not draw radar.png and timing.png");
   cmd->add_flag("--table1-only", table1_only, "Run Table 1 only");
   cmd->add_flag("--timing-only", timing_only, "Run the timing only");
+  cmd->add_option("--jobs", options.jobs,
+                  "Table 1's cases run at once, each a `tissue compare` child with its share of the cores (0: as many "
+                  "as cores; 1: one after the other in this process). The timing always runs alone")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->callback([] {
     options.plot = !no_plot;
     options.table1 = !timing_only;
     options.timing = !table1_only;
+    options.tissue_binary = this_program();
     throw CommandResult{run_reproduce(options)};
   });
 }

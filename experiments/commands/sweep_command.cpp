@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "experiments/io/child_process.hpp"
 #include "experiments/io/progress.hpp"
 #include "experiments/studies/sweep.hpp"
 
@@ -29,11 +30,7 @@ void add_sweep_command(CLI::App& app) {
     options.retry_failed = !no_retry;
     options.plot = !no_plot;
     // Each run is a child of this very program.
-    const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
-    const std::string deleted = " (deleted)";
-    if (self.size() > deleted.size() && self.compare(self.size() - deleted.size(), deleted.size(), deleted) == 0)
-      throw std::runtime_error("the tissue program was replaced on disk while this sweep started (a rebuild?); "
-                               "start the sweep again");
+    const std::string self = this_program();
     throw CommandResult{run_sweep_command(sweep_file, options, dry_run, self)};
   });
 }

@@ -5,16 +5,48 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <stdexcept>
+#include <thread>
 
 extern char** environ;
 
 namespace experiments {
 
-ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& log_path) {
+namespace {
+
+/// This process's environment with `overrides` ("NAME=value") added or replacing the variables of their names.
+std::vector<std::string> merged_environment(const std::vector<std::string>& overrides) {
+  std::vector<std::string> merged;
+  const auto name_of = [](const std::string& entry) { return entry.substr(0, entry.find('=')); };
+  for (char** e = environ; *e; ++e) {
+    const std::string entry(*e);
+    if (std::none_of(overrides.begin(), overrides.end(),
+                     [&](const std::string& o) { return name_of(o) == name_of(entry); }))
+      merged.push_back(entry);
+  }
+  merged.insert(merged.end(), overrides.begin(), overrides.end());
+  return merged;
+}
+
+}  // namespace
+
+std::vector<std::string> thread_limit_environment(int threads) {
+  const std::string n = std::to_string(std::max(1, threads));
+  return {"DEAL_II_NUM_THREADS=" + n, "OMP_NUM_THREADS=" + n, "OPENBLAS_NUM_THREADS=" + n};
+}
+
+int threads_per_child(int children) {
+  const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, cores / std::max(1, children));
+}
+
+ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& log_path,
+                           const std::vector<std::string>& environment) {
   ProcessOutcome outcome;
   if (argv.empty()) {
     outcome.error = "no program to run";
@@ -31,8 +63,15 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
     posix_spawn_file_actions_adddup2(&actions, STDOUT_FILENO, STDERR_FILENO);
   }
   posix_spawn_file_actions_addopen(&actions, STDIN_FILENO, "/dev/null", O_RDONLY, 0);
+  std::vector<std::string> env_entries;
+  std::vector<char*> env;
+  if (!environment.empty()) {
+    env_entries = merged_environment(environment);
+    for (auto& e : env_entries) env.push_back(e.data());
+    env.push_back(nullptr);
+  }
   pid_t pid = 0;
-  const int rc = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), environ);
+  const int rc = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), env.empty() ? environ : env.data());
   posix_spawn_file_actions_destroy(&actions);
   if (rc != 0) {
     outcome.error = "cannot start " + argv[0] + ": " + std::strerror(rc);
@@ -55,6 +94,15 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
                     strsignal(outcome.signal) + ")";
   }
   return outcome;
+}
+
+std::string this_program() {
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  const std::string deleted = " (deleted)";
+  if (self.size() > deleted.size() && self.compare(self.size() - deleted.size(), deleted.size(), deleted) == 0)
+    throw std::runtime_error("the tissue program was replaced on disk after this command started (a rebuild?); "
+                             "start the command again");
+  return self;
 }
 
 std::string plot_python() {

@@ -16,8 +16,23 @@ struct ProcessOutcome {
 };
 
 /// Run argv[0] (searched in PATH when it has no '/') with `argv`; its stdout and stderr go to `log_path`
-/// (appended; created when missing), or are inherited when `log_path` is empty.
-ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& log_path);
+/// (appended; created when missing), or are inherited when `log_path` is empty. The child inherits this process's
+/// environment, with each "NAME=value" of `environment` added or replacing the variable of that name.
+ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& log_path,
+                           const std::vector<std::string>& environment = {});
+
+/// The environment (for run_process) that keeps a child `tissue` to `threads` threads of computation: deal.II's
+/// task pool (the FEM's assembly), OpenMP's (the meshless models' loops) and OpenBLAS's. Children run side by side
+/// get a share of the cores each, so that none of them waits for a core another one's threads hold.
+std::vector<std::string> thread_limit_environment(int threads);
+
+/// Each child's share of this machine's cores when `children` run at once: max(1, cores / children).
+int threads_per_child(int children);
+
+/// This running program's file (/proc/self/exe), for children that run it again (`tissue sweep`'s runs, `tissue
+/// reproduce`'s Table 1 cases). Throws when the file was replaced on disk since this process started (a rebuild):
+/// the children would run another program.
+std::string this_program();
 
 /// The Python interpreter for the plot scripts: $TISSUE_PYTHON when set, else Debian's /usr/bin/python3 (where
 /// python3-matplotlib lives) when it exists, else `python3` from PATH.

@@ -19,6 +19,10 @@ void Progress::step(const std::string& what) {
   std::cerr << fmt::format("[{} {}/{}] {} (t = {:.1f} s)\n", task_, current_, total_, what, elapsed_seconds());
 }
 
+void Progress::note(const std::string& what) {
+  if (!quiet_) std::cerr << fmt::format("[{}] {} (t = {:.1f} s)\n", task_, what, elapsed_seconds());
+}
+
 void Progress::done() {
   if (!quiet_) std::cerr << fmt::format("[{}] done in {:.1f} s\n", task_, elapsed_seconds());
 }

@@ -16,6 +16,7 @@ class Progress {
   /// `quiet`: count and time the steps but print nothing (the MPI processes other than rank 0).
   Progress(std::string task, int total_steps, bool quiet = false);
   void step(const std::string& what);  ///< announce the next step
+  void note(const std::string& what);  ///< a line within the current step (news of work running elsewhere)
   void done();                         ///< announce completion with the elapsed time
   double elapsed_seconds() const;
 

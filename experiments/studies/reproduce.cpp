@@ -13,6 +13,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <thread>
 
 #include "core/case.hpp"
 #include "core/geometry.hpp"
@@ -22,6 +23,7 @@
 #include "experiments/comparator/compare.hpp"
 #include "experiments/studies/cloud_change.hpp"
 #include "experiments/io/child_process.hpp"
+#include "experiments/io/side_by_side.hpp"
 #include "experiments/models/model_registry.hpp"
 #include "experiments/models/model_result.hpp"
 #include "experiments/io/progress.hpp"
@@ -489,6 +491,9 @@ std::string table1_md(const json& rows) {
         "reference's error bar (RMS) and the cloud change combined, sqrt(bar² + change²): above 2× significant, 1–2× "
         "marginal; then the same against the extrapolated FEM, with their bar. Each case's full comparison (per-sample "
         "errors, flags, timings, radar diagram) is in its sub-folder.\n";
+  if (!rows.empty() && rows.front().contains("run"))
+    md += fmt::format("\nThe cases ran {}: the times in their sub-folders are of that run; timing.md's, measured "
+                      "alone, are the speed figures.\n", rows.front().at("run").get<std::string>());
   return md;
 }
 
@@ -678,7 +683,94 @@ ReproducePlan load_reproduce_plan(const std::string& file) {
 bool ReproduceOptions::IsValid(std::string* why) const {
   if (out_dir.empty()) return *why = "--out must not be empty", false;
   if (!table1 && !timing) return *why = "--table1-only and --timing-only exclude each other", false;
+  if (jobs < 0) return *why = "--jobs must be >= 0 (0: as many as cores)", false;
+  if (jobs != 1 && tissue_binary.empty())
+    return *why = "the `tissue` program that runs Table 1's cases side by side is not set (or use --jobs 1)", false;
   return true;
+}
+
+namespace {
+
+/// The `tissue compare` options of a Table 1 case, written into `out`'s `label` folder.
+CompareOptions table1_compare_options(const ReproducePlan::Table1Case& t, const ReproduceOptions& options,
+                                      const core::OutputDirectory& out) {
+  CompareOptions compare;
+  compare.out_dir = out.file(t.label).string();
+  compare.plot = options.plot;
+  compare.reference_family = t.reference_family;
+  return compare;
+}
+
+
+/// A Table 1 row from the case's compare folder in `out`, with its cloud changes.
+json table1_row_of(const ReproducePlan::Table1Case& t, const core::OutputDirectory& out) {
+  json row = table1_row(t, read_json_file(out.file(t.label + "/summary.json").string()));
+  row["cloud_change"] = row_cloud_change(t, row, false).to_json();
+  row["cloud_change_versus_extrapolated"] = row_cloud_change(t, row, true).to_json();
+  return row;
+}
+
+/// Table 1's rows: each case's `tissue compare`, in this process one after the other, or side by side in child
+/// processes (ReproduceOptions::jobs), each kept to its share of the cores.
+json table1_rows(const ReproducePlan& plan, const ReproduceOptions& options, const core::OutputDirectory& out,
+                 Progress* progress) {
+  json rows = json::array();
+  const int children = options.table1_children(static_cast<int>(plan.table1.size()));
+  if (children == 1) {
+    for (const auto& t : plan.table1) {
+      progress->step(fmt::format("Table 1, {}: tissue compare {}", t.label, t.config));
+      if (const int code = run_compare(t.config, table1_compare_options(t, options, out)); code != 0)
+        throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
+      rows.push_back(table1_row_of(t, out));
+    }
+    return rows;
+  }
+  std::vector<ChildJob> jobs;
+  for (const auto& t : plan.table1)
+    jobs.push_back({fmt::format("Table 1, {}", t.label),
+                    compare_command_line(options.tissue_binary, t.config, table1_compare_options(t, options, out)),
+                    out.file(t.label + ".log").string()});
+  SideBySideOptions side;
+  side.children = children;
+  side.threads_per_child = threads_per_child(children);
+  const std::vector<ProcessOutcome> outcomes = run_side_by_side(jobs, side, progress);
+  std::string failures;
+  for (std::size_t i = 0; i < jobs.size(); ++i)
+    if (!outcomes[i].ok()) {
+      // The staged folder, and the log in it, is removed when this run fails: the log's end is printed here.
+      std::cerr << fmt::format("--- the end of {} ---\n{}", jobs[i].log_file, tail_of_file(jobs[i].log_file, 25));
+      const std::string error = last_error_line(jobs[i].log_file);
+      failures += fmt::format("{}tissue compare {} failed: {}", failures.empty() ? "" : "; ", plan.table1[i].config,
+                              error.empty() ? outcomes[i].error : error + " (" + outcomes[i].error + ")");
+    }
+  if (!failures.empty()) throw std::runtime_error("reproduce: " + failures + " (the end of its log is above)");
+  const std::string run = fmt::format("side by side, {} at once with {} thread{} each", children,
+                                      side.threads_per_child, side.threads_per_child == 1 ? "" : "s");
+  for (std::size_t i = 0; i < jobs.size(); ++i) {
+    std::filesystem::remove(jobs[i].log_file);  // it succeeded: its results are in the case's folder
+    json row = table1_row_of(plan.table1[i], out);
+    row["run"] = run;
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+}  // namespace
+
+std::vector<std::string> compare_command_line(const std::string& tissue_binary, const std::string& config,
+                                              const CompareOptions& compare) {
+  std::vector<std::string> argv{tissue_binary, "compare", config, "--out", compare.out_dir};
+  if (!compare.plot) argv.push_back("--no-plot");
+  for (const std::string& f : compare.reference_family) {
+    argv.push_back("--reference-family");
+    argv.push_back(f);
+  }
+  return argv;
+}
+
+int ReproduceOptions::table1_children(int cases) const {
+  const int wanted = jobs > 0 ? jobs : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return std::max(1, std::min(wanted, cases));
 }
 
 int run_reproduce(const ReproduceOptions& options) {
@@ -704,20 +796,7 @@ int run_reproduce(const ReproduceOptions& options) {
   write_text_file(out.file("plan.json").string(), read_json_file(options.plan).dump(2) + "\n");
 
   if (options.table1) {
-    json rows = json::array();
-    for (const auto& t : plan.table1) {
-      progress.step(fmt::format("Table 1, {}: tissue compare {}", t.label, t.config));
-      CompareOptions compare;
-      compare.out_dir = out.file(t.label).string();
-      compare.plot = options.plot;
-      compare.reference_family = t.reference_family;
-      if (const int code = run_compare(t.config, compare); code != 0)
-        throw std::runtime_error(fmt::format("reproduce: tissue compare {} failed (exit {})", t.config, code));
-      json row = table1_row(t, read_json_file(out.file(t.label + "/summary.json").string()));
-      row["cloud_change"] = row_cloud_change(t, row, false).to_json();
-      row["cloud_change_versus_extrapolated"] = row_cloud_change(t, row, true).to_json();
-      rows.push_back(row);
-    }
+    const json rows = table1_rows(plan, options, out, &progress);
     write_text_file(out.file("table1.json").string(), json{{"rows", rows}}.dump(2) + "\n");
     const std::string md = table1_md(rows);
     write_text_file(out.file("table1.md").string(), md);

@@ -22,6 +22,8 @@ class Surrogate;
 
 namespace experiments {
 
+struct CompareOptions;
+
 /// What `tissue reproduce` runs (configs/reproduce.json). Case paths are relative to the plan's folder.
 struct ReproducePlan {
   struct Table1Case {
@@ -69,8 +71,20 @@ struct ReproduceOptions {
   bool plot = true;
   bool table1 = true;  ///< false: the timing only
   bool timing = true;  ///< false: Table 1 only
+  /// Table 1's cases run at once, each `tissue compare` a child process of `tissue_binary` kept to its share of the
+  /// cores (experiments/io/side_by_side.hpp); 0: as many as cores, up to the cases; 1: one after the other in this
+  /// process. The timing runs alone afterwards either way: its figures are speeds.
+  int jobs = 0;
+  std::string tissue_binary;  ///< the `tissue` program the children run (needed when more than one case runs at once)
   bool IsValid(std::string* why) const;
+  /// How many of `cases` Table 1 cases run at once.
+  int table1_children(int cases) const;
 };
+
+/// A Table 1 case's compare as a `tissue compare` command line of `tissue_binary` (how the cases run side by side):
+/// the options reproduce sets (out_dir, plot, reference_family) as compare's flags.
+std::vector<std::string> compare_command_line(const std::string& tissue_binary, const std::string& config,
+                                              const CompareOptions& compare);
 
 /// `tissue reproduce`; returns the exit code.
 int run_reproduce(const ReproduceOptions& options);

@@ -25,6 +25,7 @@
 #include "core/json_reader.hpp"
 #include "experiments/comparator/compare.hpp"
 #include "experiments/io/child_process.hpp"
+#include "experiments/io/side_by_side.hpp"
 #include "experiments/models/model_result.hpp"
 #include "experiments/io/progress.hpp"
 
@@ -529,21 +530,23 @@ bool SweepOptions::IsValid(std::string* why) const {
   return true;
 }
 
+int sweep_workers(const SweepSpec& spec, const SweepOptions& options) {
+  return std::max(1, options.workers > 0 ? options.workers : spec.workers);
+}
+
 RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot,
-                                     const std::vector<std::string>& compare_arguments) {
-  return [tissue_binary, plot, compare_arguments](const SweepRun&, const std::string& case_file,
+                                     const std::vector<std::string>& compare_arguments, int threads) {
+  const std::vector<std::string> environment = threads > 0 ? thread_limit_environment(threads) : std::vector<std::string>();
+  return [tissue_binary, plot, compare_arguments, environment](const SweepRun&, const std::string& case_file,
                                                   const std::string& run_dir, const std::string& log_file) {
     RunOutcome outcome;
     std::vector<std::string> argv{tissue_binary, "compare", case_file, "--out", run_dir};
     if (!plot) argv.push_back("--no-plot");
     argv.insert(argv.end(), compare_arguments.begin(), compare_arguments.end());
-    const ProcessOutcome p = run_process(argv, log_file);
+    const ProcessOutcome p = run_process(argv, log_file, environment);
     if (!p.ok()) {
       // The child's own `error: ...` line says why; fall back on how it ended.
-      std::ifstream in(log_file);
-      std::string line, last_error;
-      while (std::getline(in, line))
-        if (line.rfind("error: ", 0) == 0) last_error = line.substr(7);
+      const std::string last_error = last_error_line(log_file);
       outcome.error = last_error.empty() ? p.error : last_error + " (" + p.error + ")";
       return outcome;
     }
@@ -591,7 +594,7 @@ SweepReport run_sweep(const SweepSpec& spec, const std::vector<SweepRun>& runs, 
     else
       pending.push_back(&run);
   }
-  const int workers = std::max(1, options.workers > 0 ? options.workers : spec.workers);
+  const int workers = sweep_workers(spec, options);
   std::cerr << fmt::format("[sweep {}] {} runs: {} already done, {} to run with {} worker(s); rows go to {}\n",
                            spec.name, report.total, report.skipped, pending.size(), workers,
                            (out / "runs.csv").string());
@@ -792,7 +795,11 @@ int run_sweep_command(const std::string& sweep_file, const SweepOptions& options
   }
   SweepOptions opt = options;
   opt.out_dir = out.string();
-  const SweepReport report = run_sweep(spec, runs, opt, compare_in_child_process(tissue_binary, false, spec.compare.arguments()));
+  // Several children at once share the cores: each gets its share, none waits for a core another's threads hold.
+  const int workers = sweep_workers(spec, opt);
+  const SweepReport report =
+      run_sweep(spec, runs, opt, compare_in_child_process(tissue_binary, false, spec.compare.arguments(),
+                                                          workers > 1 ? threads_per_child(workers) : 0));
   write_sweep_summary(spec, runs, out, options.plot);
   std::cout << fmt::format("{}: {} runs, {} skipped (done before), {} succeeded, {} failed; wrote {}\n", spec.name,
                            report.total, report.skipped, report.succeeded, report.failed,

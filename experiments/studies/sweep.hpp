@@ -83,9 +83,10 @@ struct RunOutcome {
 using RunFunction = std::function<RunOutcome(const SweepRun& run, const std::string& case_file,
                                              const std::string& run_dir, const std::string& log_file)>;
 
-/// `tissue compare CASE --out RUN_DIR [--no-plot] [compare_arguments...]` in a child process of `tissue_binary`.
+/// `tissue compare CASE --out RUN_DIR [--no-plot] [compare_arguments...]` in a child process of `tissue_binary`;
+/// `threads` > 0 keeps the child to that many threads (thread_limit_environment), 0 leaves it all the cores.
 RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot,
-                                     const std::vector<std::string>& compare_arguments = {});
+                                     const std::vector<std::string>& compare_arguments = {}, int threads = 0);
 
 struct SweepOptions {
   std::string out_dir;        ///< default results/sweeps/<name>
@@ -94,6 +95,9 @@ struct SweepOptions {
   bool plot = true;           ///< sweep.png through scripts/plot_sweep.py
   bool IsValid(std::string* why) const;
 };
+
+/// The children a sweep runs at once: --workers, else the sweep file's `workers`.
+int sweep_workers(const SweepSpec& spec, const SweepOptions& options);
 
 struct SweepReport {
   int total = 0;
