@@ -1,8 +1,8 @@
 #pragma once
 // Child programs run side by side, a few at a time, each kept to its share of the cores. `tissue reproduce` runs
-// its Table 1 cases this way: one process of the FEM and the meshless models keeps only 1.2-1.7 of 2 cores busy
-// (docs/PERFORMANCE.md, "Table 1's cases side by side"), so two of them at one thread each finish sooner than one
-// after the other at two.
+// its Table 1 cases this way: a second thread speeds one process of the FEM and the meshless models up by only
+// 1.17-1.68x (docs/PERFORMANCE.md, "Table 1's cases side by side"), so two of them at one thread each finish sooner
+// than one after the other at two.
 //
 // Thread safety: run_side_by_side is called from one thread; it starts one waiting thread per child running and
 // prints (through `progress`) only from the calling thread.

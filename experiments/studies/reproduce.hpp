@@ -7,6 +7,8 @@
 //   plan.json            the plan as run
 //   table1.md/.json      our RMSEs beside the paper's, with the reference's error bar
 //   <label>/             each Table 1 case's full `tissue compare` folder
+//   <label>.log          while the cases run side by side (ReproduceOptions::jobs), that child's output; removed
+//                        when it succeeds
 //   timing.md/.json      per force: the full meshless solve, the FEM reference and the surrogate's query (when
 //                        the plan names a surrogate case: trained once, then queried)
 //   timing.png           the timing as grouped bars (scripts/plot_timing.py)
