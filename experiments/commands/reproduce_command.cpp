@@ -24,7 +24,7 @@ void add_reproduce_command(CLI::App& app) {
   cmd->add_option("--jobs", options.jobs,
                   "Table 1's cases run at once, each a `tissue compare` child with its share of the cores (0: as many "
                   "as cores; 1: one after the other in this process). The timing always runs alone")
-      ->check(CLI::NonNegativeNumber)
+      ->check(CLI::Range(0, 64))
       ->capture_default_str();
   cmd->callback([] {
     options.plot = !no_plot;
