@@ -9,7 +9,9 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <thread>
 
@@ -94,6 +96,37 @@ ProcessOutcome run_process(const std::vector<std::string>& argv, const std::stri
                     strsignal(outcome.signal) + ")";
   }
   return outcome;
+}
+
+/// The last line of `file` that starts with `prefix`, or "".
+std::string last_line_starting_with(const std::string& file, const std::string& prefix) {
+  std::ifstream in(file);
+  std::string line, last;
+  while (std::getline(in, line))
+    if (line.rfind(prefix, 0) == 0) last = line;
+  return last;
+}
+
+std::string last_error_line(const std::string& log_file) {
+  const std::string line = last_line_starting_with(log_file, "error: ");
+  return line.empty() ? line : line.substr(7);
+}
+
+std::string child_failure(const ProcessOutcome& outcome, const std::string& log_file) {
+  const std::string error = last_error_line(log_file);
+  return error.empty() ? outcome.error : error + " (" + outcome.error + ")";
+}
+
+std::string tail_of_file(const std::string& file, int lines) {
+  std::ifstream in(file);
+  std::deque<std::string> kept;
+  for (std::string line; std::getline(in, line);) {
+    kept.push_back(line);
+    if (static_cast<int>(kept.size()) > lines) kept.pop_front();
+  }
+  std::string text;
+  for (const auto& l : kept) text += l + "\n";
+  return text;
 }
 
 std::string this_program() {

@@ -21,6 +21,20 @@ struct ProcessOutcome {
 ProcessOutcome run_process(const std::vector<std::string>& argv, const std::string& log_path,
                            const std::vector<std::string>& environment = {});
 
+/// The last line of `file` that starts with `prefix`, or "" (a child's latest progress line: prefix "[").
+std::string last_line_starting_with(const std::string& file, const std::string& prefix);
+
+/// The last line of a child's log that starts with "error: " (a `tissue` command's own report of why it failed),
+/// without that prefix, or "".
+std::string last_error_line(const std::string& log_file);
+
+/// Why a child that ended badly failed: its log's own `error:` line with how it ended in brackets, or only how it
+/// ended when the log has none.
+std::string child_failure(const ProcessOutcome& outcome, const std::string& log_file);
+
+/// The last `lines` lines of a text file (fewer when it is shorter), for a failure report.
+std::string tail_of_file(const std::string& file, int lines);
+
 /// The environment (for run_process) that keeps a child `tissue` to `threads` threads of computation: deal.II's
 /// task pool (the FEM's assembly), OpenMP's (the meshless models' loops) and OpenBLAS's. Children run side by side
 /// get a share of the cores each, so that none of them waits for a core another one's threads hold.

@@ -6,8 +6,6 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
-#include <deque>
-#include <fstream>
 #include <mutex>
 #include <stdexcept>
 #include <thread>
@@ -15,19 +13,6 @@
 #include "experiments/io/progress.hpp"
 
 namespace experiments {
-
-namespace {
-
-/// The last line of `file` that starts with `prefix`, or "".
-std::string last_line_starting_with(const std::string& file, const std::string& prefix) {
-  std::ifstream in(file);
-  std::string line, last;
-  while (std::getline(in, line))
-    if (line.rfind(prefix, 0) == 0) last = line;
-  return last;
-}
-
-}  // namespace
 
 bool SideBySideOptions::IsValid(std::string* why) const {
   const auto fail = [&](const char* what) {
@@ -38,23 +23,6 @@ bool SideBySideOptions::IsValid(std::string* why) const {
   if (threads_per_child < 1) return fail("threads_per_child must be >= 1");
   if (!(status_interval_seconds > 0.0)) return fail("status_interval_seconds must be > 0");
   return true;
-}
-
-std::string last_error_line(const std::string& log_file) {
-  const std::string line = last_line_starting_with(log_file, "error: ");
-  return line.empty() ? line : line.substr(7);
-}
-
-std::string tail_of_file(const std::string& file, int lines) {
-  std::ifstream in(file);
-  std::deque<std::string> kept;
-  for (std::string line; std::getline(in, line);) {
-    kept.push_back(line);
-    if (static_cast<int>(kept.size()) > lines) kept.pop_front();
-  }
-  std::string text;
-  for (const auto& l : kept) text += l + "\n";
-  return text;
 }
 
 std::vector<ProcessOutcome> run_side_by_side(const std::vector<ChildJob>& jobs, const SideBySideOptions& options,
@@ -117,9 +85,8 @@ std::vector<ProcessOutcome> run_side_by_side(const std::vector<ChildJob>& jobs, 
         if (o.ok()) {
           progress->note(fmt::format("{}: done in {:.1f} s", jobs[i].label, s.wall_seconds));
         } else {
-          const std::string error = last_error_line(jobs[i].log_file);
           progress->note(fmt::format("{}: FAILED after {:.1f} s: {}", jobs[i].label, s.wall_seconds,
-                                     error.empty() ? o.error : error + " (" + o.error + ")"));
+                                     child_failure(o, jobs[i].log_file)));
         }
       }
     }

@@ -36,10 +36,4 @@ struct SideBySideOptions {
 std::vector<ProcessOutcome> run_side_by_side(const std::vector<ChildJob>& jobs, const SideBySideOptions& options,
                                              Progress* progress);
 
-/// The last line of a log that starts with "error: " (a `tissue` command's own report of why it failed), or "".
-std::string last_error_line(const std::string& log_file);
-
-/// The last `lines` lines of a text file (fewer when it is shorter), for a failure report.
-std::string tail_of_file(const std::string& file, int lines);
-
 }  // namespace experiments

@@ -701,7 +701,6 @@ CompareOptions table1_compare_options(const ReproducePlan::Table1Case& t, const 
   return compare;
 }
 
-
 /// A Table 1 row from the case's compare folder in `out`, with its cloud changes.
 json table1_row_of(const ReproducePlan::Table1Case& t, const core::OutputDirectory& out) {
   json row = table1_row(t, read_json_file(out.file(t.label + "/summary.json").string()));
@@ -739,9 +738,8 @@ json table1_rows(const ReproducePlan& plan, const ReproduceOptions& options, con
     if (!outcomes[i].ok()) {
       // The staged folder, and the log in it, is removed when this run fails: the log's end is printed here.
       std::cerr << fmt::format("--- the end of {} ---\n{}", jobs[i].log_file, tail_of_file(jobs[i].log_file, 25));
-      const std::string error = last_error_line(jobs[i].log_file);
       failures += fmt::format("{}tissue compare {} failed: {}", failures.empty() ? "" : "; ", plan.table1[i].config,
-                              error.empty() ? outcomes[i].error : error + " (" + outcomes[i].error + ")");
+                              child_failure(outcomes[i], jobs[i].log_file));
     }
   if (!failures.empty()) throw std::runtime_error("reproduce: " + failures + " (the end of its log is above)");
   const std::string run = fmt::format("side by side, {} at once with {} thread{} each", children,

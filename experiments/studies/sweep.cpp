@@ -25,7 +25,6 @@
 #include "core/json_reader.hpp"
 #include "experiments/comparator/compare.hpp"
 #include "experiments/io/child_process.hpp"
-#include "experiments/io/side_by_side.hpp"
 #include "experiments/models/model_result.hpp"
 #include "experiments/io/progress.hpp"
 
@@ -545,9 +544,7 @@ RunFunction compare_in_child_process(const std::string& tissue_binary, bool plot
     argv.insert(argv.end(), compare_arguments.begin(), compare_arguments.end());
     const ProcessOutcome p = run_process(argv, log_file, environment);
     if (!p.ok()) {
-      // The child's own `error: ...` line says why; fall back on how it ended.
-      const std::string last_error = last_error_line(log_file);
-      outcome.error = last_error.empty() ? p.error : last_error + " (" + p.error + ")";
+      outcome.error = child_failure(p, log_file);  // the child's own `error: ...` line, else how it ended
       return outcome;
     }
     std::ifstream in(fs::path(run_dir) / "summary.json");
