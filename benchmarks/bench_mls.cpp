@@ -1,11 +1,14 @@
 // Throughput of MLS shape-function evaluation (paper eqs. 1-8) on jittered-grid clouds of ~2k, 8k and 32k
-// nodes with the default support radii (d_max = 2, k = 8). items_per_second = evaluation points per second.
+// nodes with the default support radii (d_max = 2, k = 8), and of the LRPIM's RPIM shape functions (the 20 nearest
+// nodes, meshless/lrpim/rpim_shape_functions.hpp) on the same clouds: the LRPIM's set-up evaluates them at every
+// integration point (docs/PERFORMANCE.md, "Where a lung case's time goes, one thread"). items_per_second = evaluation points per second.
 #include <benchmark/benchmark.h>
 
 #include <memory>
 #include <random>
 #include <vector>
 
+#include "meshless/lrpim/rpim_shape_functions.hpp"
 #include "meshless/mls/mls_shape_functions.hpp"
 #include "meshless/mls/node_search.hpp"
 #include "meshless/mls/support_radii.hpp"
@@ -65,12 +68,31 @@ void run(benchmark::State& state, bool with_gradients) {
   state.counters["mean_support"] = neighbours / static_cast<double>(state.iterations());
 }
 
+void run_rpim(benchmark::State& state, bool with_gradients) {
+  Fixture& f = fixture(static_cast<int>(state.range(0)));
+  const meshless::lrpim::RpimShapeFunctions rpim(f.nodes, f.search, Fixture::kSpacing);
+  meshless::lrpim::RpimEvaluation ev;
+  size_t i = 0;
+  for (auto _ : state) {
+    rpim.evaluate(f.points[i++ % f.points.size()], with_gradients, &ev);
+    benchmark::DoNotOptimize(ev.phi.data());
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(state.iterations());
+  state.counters["nodes"] = static_cast<double>(f.nodes.rows());
+}
+
 void BM_MlsValues(benchmark::State& state) { run(state, false); }
 void BM_MlsValuesAndGradients(benchmark::State& state) { run(state, true); }
 
 // 13^3 = 2197, 20^3 = 8000, 32^3 = 32768 nodes.
 BENCHMARK(BM_MlsValues)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMicrosecond);
 BENCHMARK(BM_MlsValuesAndGradients)->Arg(13)->Arg(20)->Arg(32)->Unit(benchmark::kMicrosecond);
+
+void BM_RpimValues(benchmark::State& state) { run_rpim(state, false); }
+void BM_RpimValuesAndGradients(benchmark::State& state) { run_rpim(state, true); }
+BENCHMARK(BM_RpimValues)->Arg(20)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_RpimValuesAndGradients)->Arg(20)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
 
