@@ -1,7 +1,8 @@
 // Throughput of MLS shape-function evaluation (paper eqs. 1-8) on jittered-grid clouds of ~2k, 8k and 32k
 // nodes with the default support radii (d_max = 2, k = 8), and of the LRPIM's RPIM shape functions (the 20 nearest
-// nodes, meshless/lrpim/rpim_shape_functions.hpp) on the same clouds: the LRPIM's set-up evaluates them at every
-// integration point (docs/PERFORMANCE.md, "Where a lung case's time goes, one thread"). items_per_second = evaluation points per second.
+// nodes, meshless/lrpim/rpim_shape_functions.hpp) on the 8k-node cloud: the LRPIM's set-up evaluates them at every
+// integration point (docs/PERFORMANCE.md, "Where a lung case's time goes, one thread").
+// items_per_second = evaluation points per second.
 #include <benchmark/benchmark.h>
 
 #include <memory>
