@@ -121,6 +121,10 @@ struct NewtonParameters {
   /// its rate (core/step_predictor.hpp, the rule the meshless models use). Changes the path only: the converged
   /// answer is the same to the Newton tolerance; a failed predicted attempt is retried from U_n before a cut-back.
   bool extrapolate_start = true;
+  /// Assemble the residual alone, without the tangent, where Newton's contraction predicts that the update just
+  /// solved ends the step (ViscoelasticSolver::assemble_system): that assembly only confirms convergence. The answer is
+  /// the same to the bit; when the prediction misses, the tangent of that iterate is assembled before the solve.
+  bool confirm_without_tangent = true;
 };
 
 struct SolverParameters {
@@ -140,7 +144,11 @@ struct StepReport {
   int linear_iterations = 0;  ///< GMRES iterations over the step
   int preconditioner_builds = 0;  ///< LU factorizations or AMG set-ups during the step
   std::vector<double> residuals;  ///< relative residual before each solve, then the converged one
-  double assembly_seconds = 0.0;
+  /// Assemblies of the residual with the tangent, and of the residual alone (the last one of a step, when Newton's
+  /// contraction predicts that it ends the step: ViscoelasticSolver::assemble_system).
+  int tangent_assemblies = 0;
+  int residual_only_assemblies = 0;
+  double assembly_seconds = 0.0;  ///< both kinds
   double solve_seconds = 0.0;
   double wall_seconds = 0.0;
   int substeps = 1;                                  ///< converged sub-steps (more than 1 after a cut-back)

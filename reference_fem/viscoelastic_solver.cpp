@@ -65,6 +65,24 @@ core::SmallestMargin smallest_over_processes(const core::SmallestMargin& local, 
   return global;
 }
 
+// Whether the Newton update just solved is expected to end the step, so that the next assembly only has to confirm
+// it and needs no tangent. `relative`: the step's relative residuals r_0 .. r_k, the last one before the update;
+// `linear_reduction`: the linear solve's ||K du - R|| / ||R||. The equations are linear (k = 0): the update leaves
+// the linear solve's residual, linear_reduction r_k. Otherwise, once Newton contracts, its quadratic range gives
+// r_{k+1} ~ C r_k^2 with C = r_k / r_{k-1}^2, plus what the inexact solve leaves. On the lung cases this estimate was
+// 1.1-2 times the residual that followed (never below it), so a factor of 2 is kept in hand. A miss costs only the
+// residual pass: the tangent of the same iterate is then assembled before the solve (newton_iterations).
+bool update_ends_step(const std::vector<double>& relative, double linear_reduction, double tolerance, bool linear) {
+  const double r = relative.back();
+  double next = linear_reduction * r;
+  if (!linear) {
+    if (relative.size() < 2 || !(r < relative[relative.size() - 2])) return false;
+    const double before = relative[relative.size() - 2];
+    next = std::max(next, r * (r / before) * (r / before));
+  }
+  return std::isfinite(next) && 2.0 * next <= tolerance;
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -251,7 +269,8 @@ void ViscoelasticSolver::apply_dirichlet_values(double t_new) {
 void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cell_iterator& cell,
                                         ScratchData& scratch, CopyData& copy) const {
   const unsigned int n = fe_.n_dofs_per_cell();
-  copy.cell_matrix.reinit(n, n);
+  const bool tangent = assemble_tangent_;
+  if (tangent) copy.cell_matrix.reinit(n, n);
   copy.cell_rhs.reinit(n);
   copy.cell_external.reinit(n);
   copy.cell_internal.reinit(n);
@@ -277,18 +296,23 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
       const Point<3>& x = scratch.fe_values.quadrature_point(q);
       copy.margin.update(law_.admissibility_margin(strain), step_time_, Eigen::Vector3d(x[0], x[1], x[2]), strain);
     }
-    const core::KelvinResponse response = law_.update(history_[first + q].state, strain, step_dt_);
     const auto Bq = B.middleRows<6>(6 * q);
     for (unsigned int i = 0; i < n; ++i) B.block<6, 1>(6 * q, i) = to_voigt(scratch.fe_values[u].symmetric_gradient(i, q));
     const double jxw = scratch.fe_values.JxW(q);
-    DB.middleRows<6>(6 * q).noalias() = (response.tangent * jxw) * Bq;
-    internal.noalias() += Bq.transpose() * (response.stress * jxw);
+    if (tangent) {
+      const core::KelvinResponse response = law_.update(history_[first + q].state, strain, step_dt_);
+      DB.middleRows<6>(6 * q).noalias() = (response.tangent * jxw) * Bq;
+      internal.noalias() += Bq.transpose() * (response.stress * jxw);
+    } else {  // the same stress, bit for bit (KelvinLaw::updated_stress), without the tangent's work
+      internal.noalias() += Bq.transpose() * (law_.updated_stress(history_[first + q].state, strain, step_dt_) * jxw);
+    }
   }
-  scratch.K.noalias() = B.transpose() * DB;
+  if (tangent) scratch.K.noalias() = B.transpose() * DB;
   for (unsigned int i = 0; i < n; ++i) {
     copy.cell_rhs(i) = -internal(i);
     copy.cell_internal(i) = internal(i);
-    for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = scratch.K(i, j);
+    if (tangent)
+      for (unsigned int j = 0; j < n; ++j) copy.cell_matrix(i, j) = scratch.K(i, j);
   }
 
   for (const auto f : cell->face_indices()) {
@@ -309,8 +333,9 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
           const double force = ks_jxw * (phi_i * scratch.face_displacements[q]);
           copy.cell_rhs(i) -= force;
           copy.cell_internal(i) += force;
-          for (unsigned int j = 0; j < n; ++j)
-            copy.cell_matrix(i, j) += ks_jxw * (phi_i * scratch.fe_face_values[u].value(j, q));
+          if (tangent)
+            for (unsigned int j = 0; j < n; ++j)
+              copy.cell_matrix(i, j) += ks_jxw * (phi_i * scratch.fe_face_values[u].value(j, q));
         }
       }
     }
@@ -336,10 +361,11 @@ void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cel
   }
 }
 
-double ViscoelasticSolver::assemble_system(double t_new, double dt) {
+double ViscoelasticSolver::assemble_system(double t_new, double dt, bool with_tangent) {
   TimerOutput::Scope scope(timer_, "assembly");
   step_time_ = t_new;
   step_dt_ = dt;
+  assemble_tangent_ = with_tangent;
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
   iterate_margin_ = core::SmallestMargin{};
@@ -347,14 +373,20 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
     local_assemble(cell, s, c);
   };
   // WorkStream's serial stage: one cell's rows into the global objects (deal.II's on one process, Trilinos's else).
-  const auto add_cell = [this](const CopyData& c, auto& matrix, auto& rhs, auto& external, auto& internal) {
+  const auto add_cell = [this, with_tangent](const CopyData& c, auto& matrix, auto& rhs, auto& external,
+                                             auto& internal) {
     iterate_margin_.update(c.margin.margin, c.margin.time, c.margin.point, c.margin.strain);
     internal.add(c.local_dof_indices, c.cell_internal);  // all rows: includes the reactions
-    zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, matrix, rhs);
+    // The constraints are homogeneous, so both calls leave the constrained rows of rhs at zero and add the free
+    // rows alike: a residual-only assembly gives the residual of the full one.
+    if (with_tangent)
+      zero_constraints_.distribute_local_to_global(c.cell_matrix, c.cell_rhs, c.local_dof_indices, matrix, rhs);
+    else
+      zero_constraints_.distribute_local_to_global(c.cell_rhs, c.local_dof_indices, rhs);
     zero_constraints_.distribute_local_to_global(c.cell_external, c.local_dof_indices, external);
   };
   if (serial_) {
-    serial_matrix_ = 0.0;
+    if (with_tangent) serial_matrix_ = 0.0;
     serial_rhs_ = 0.0;
     serial_external_ = 0.0;
     serial_internal_ = 0.0;
@@ -362,13 +394,13 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
         first_owned(dof_handler_), end_owned(dof_handler_), local,  // one process: every cell
         [&](const CopyData& c) { add_cell(c, serial_matrix_, serial_rhs_, serial_external_, serial_internal_); },
         scratch, CopyData());
-    serial_copy_->copy(serial_matrix_, &system_matrix_);
+    if (with_tangent) serial_copy_->copy(serial_matrix_, &system_matrix_);
     for (types::global_dof_index i = 0; i < serial_rhs_.size(); ++i) system_rhs_[i] = serial_rhs_(i);
     system_rhs_.compress(VectorOperation::insert);
     external_force_norm_ = serial_external_.l2_norm();
     internal_force_norm_ = serial_internal_.l2_norm();
   } else {
-    system_matrix_ = 0.0;
+    if (with_tangent) system_matrix_ = 0.0;
     system_rhs_ = 0.0;
     TrilinosWrappers::MPI::Vector external(locally_owned_dofs_, mpi_communicator_);
     TrilinosWrappers::MPI::Vector internal(locally_owned_dofs_, mpi_communicator_);
@@ -377,7 +409,7 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt) {
         first_owned(dof_handler_), end_owned(dof_handler_), local,
         [&](const CopyData& c) { add_cell(c, system_matrix_, system_rhs_, external, internal); }, scratch,
         CopyData());
-    system_matrix_.compress(VectorOperation::add);
+    if (with_tangent) system_matrix_.compress(VectorOperation::add);  // the same choice on every process
     system_rhs_.compress(VectorOperation::add);
     external.compress(VectorOperation::add);
     internal.compress(VectorOperation::add);
@@ -446,6 +478,7 @@ void ViscoelasticSolver::solve(double eta) {
           linear.type == LinearSolverType::amg ? "AMG" : "LU", eta, linear.max_iterations, step_time_));
   }
   last_linear_iterations_ = iterations;
+  last_linear_reduction_ = reached / rhs_norm;
   const double decades = std::max(1.0, std::log10(rhs_norm / std::max(reached, 1e-300 * rhs_norm)));
   if (iterations > linear.rebuild_after * decades) rebuild_ = true;
   zero_constraints_.distribute(newton_update_);
@@ -546,9 +579,11 @@ core::NewtonAttempt ViscoelasticSolver::newton_iterations(double t_new, const Tr
 
   const core::DivergenceTest diverging;
   double reference = 0.0;
+  bool with_tangent = true;  // false when the update just made is predicted to end the step (update_ends_step)
   for (int iteration = 0;; ++iteration) {
     const auto t_assembly = std::chrono::steady_clock::now();
-    const double norm = assemble_system(t_new, dt);
+    const double norm = assemble_system(t_new, dt, with_tangent);
+    ++(with_tangent ? report->tangent_assemblies : report->residual_only_assemblies);
     report->assembly_seconds += seconds_since(t_assembly);
     // Relative residual: scaled by the largest of the first residual of the step, the external load and
     // the internal force (reactions included), so that a step that barely changes (relaxation or creep
@@ -565,6 +600,12 @@ core::NewtonAttempt ViscoelasticSolver::newton_iterations(double t_new, const Tr
     if (iteration >= parameters_.newton.max_iterations) {
       attempt.failure = "the iteration limit (max_newton_iterations) was reached";
       break;
+    }
+    if (!with_tangent) {  // the prediction missed: this iterate's tangent is needed after all (same residual)
+      const auto t_tangent = std::chrono::steady_clock::now();
+      assemble_system(t_new, dt, true);
+      ++report->tangent_assemblies;
+      report->assembly_seconds += seconds_since(t_tangent);
     }
     const auto t_solve = std::chrono::steady_clock::now();
     const int builds_before = preconditioner_builds_;
@@ -587,6 +628,9 @@ core::NewtonAttempt ViscoelasticSolver::newton_iterations(double t_new, const Tr
     report->preconditioner_builds += preconditioner_builds_ - builds_before;
     ++report->newton_iterations;
     ++attempt.iterations;
+    with_tangent = !(parameters_.newton.confirm_without_tangent &&
+                     update_ends_step(attempt.residuals, last_linear_reduction_, parameters_.newton.tolerance,
+                                      parameters_.material.k == 0.0));
   }
   if (!attempt.converged()) {
     solution_ = committed;
@@ -604,7 +648,7 @@ std::shared_ptr<const core::InadmissibleStrain> ViscoelasticSolver::inadmissible
 
 void ViscoelasticSolver::assemble_newton_system(double t_new) {
   apply_dirichlet_values(t_new);
-  assemble_system(t_new, t_new - time_);
+  assemble_system(t_new, t_new - time_, true);
 }
 
 void ViscoelasticSolver::run(const std::vector<double>& times, const std::function<void(const StepReport&)>& on_step) {

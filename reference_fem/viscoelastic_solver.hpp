@@ -113,8 +113,10 @@ class ViscoelasticSolver {
       const std::function<void(const dealii::Point<3>&, double, const PointHistory&)>& visit) const;
 
   /// Assemble the tangent (eq. 21 with E_k of eq. 13) and the residual R = F_ext - F_int at the current
-  /// solution, with the history of t_n and the step dt. Returns the residual norm (free rows only).
-  double assemble_system(double t_new, double dt);
+  /// solution, with the history of t_n and the step dt. Returns the residual norm (free rows only). Without the
+  /// tangent (`with_tangent` false) only the residual and the force norms are assembled, the same to the bit, and
+  /// system_matrix() keeps the last tangent: for the assembly that only confirms convergence.
+  double assemble_system(double t_new, double dt, bool with_tangent);
   /// Solve K du = R to eta ||R|| (GMRES) and update the solution.
   void solve(double eta);
   void apply_dirichlet_values(double t_new);
@@ -170,6 +172,8 @@ class ViscoelasticSolver {
   dealii::Vector<double> serial_rhs_, serial_external_, serial_internal_;
   bool rebuild_ = true;
   int last_linear_iterations_ = 0;
+  double last_linear_reduction_ = 1.0;  // ||K du - R|| / ||R|| that the last solve reached
+  bool assemble_tangent_ = true;        // of the assembly being run (read by the workers, as step_time_)
   int preconditioner_builds_ = 0;
 
   std::vector<PointHistory> history_;  // active_cell_index * n_q + q, filled on locally owned cells only

@@ -117,6 +117,28 @@ TEST(FemCutback, ExtrapolatedStartChangesThePathNotTheAnswer) {
   EXPECT_EQ(predicted.steps[5].newton_iterations, plain.steps[5].newton_iterations);  // the hold's first step
 }
 
+TEST(FemCutback, ConvergenceConfirmedWithoutTheTangentGivesTheSameAnswer) {
+  // NewtonParameters::confirm_without_tangent over a ramp and a hold (k = 1): the last assembly of each step is the
+  // residual alone, and the run is the same to the bit, with one tangent fewer per step.
+  const std::vector<double> times = {0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0};
+  auto solve = [&](bool confirm_without_tangent) {
+    SolverParameters p = bar_parameters(25, 0.0);
+    p.newton.confirm_without_tangent = confirm_without_tangent;
+    return solve_on_mesh(bar_mesh(), p, compression(1000.0, true), times, kTip);
+  };
+  const FemRunResult full = solve(false), confirmed = solve(true);
+  EXPECT_EQ(full.vertex_displacements, confirmed.vertex_displacements);  // bitwise
+  ASSERT_EQ(full.steps.size(), confirmed.steps.size());
+  for (std::size_t i = 0; i < full.steps.size(); ++i) {
+    const StepReport &a = full.steps[i], &b = confirmed.steps[i];
+    EXPECT_EQ(a.residuals, b.residuals) << "step " << a.step;
+    EXPECT_EQ(a.residual_only_assemblies, 0);
+    EXPECT_EQ(a.tangent_assemblies, a.newton_iterations + 1);
+    EXPECT_EQ(b.residual_only_assemblies, 1) << "step " << b.step;  // the confirmation, predicted at every step
+    EXPECT_EQ(b.tangent_assemblies, b.newton_iterations) << "step " << b.step;
+  }
+}
+
 TEST(FemCutback, HalvedStepEqualsPlainHalfStepsAtTheRequestedTimes) {
   const int limit = limit_where_only_half_steps_converge();
   const FemRunResult cut = run(kPressure, {1.0}, limit, 0.5), plain = run(kPressure, {0.5, 1.0}, limit, 0.0);

@@ -30,14 +30,18 @@ ModelResult fem_model_result(const core::Case& c, const core::Geometry& g, const
   r.sample_displacements = f.sample_displacements;
   r.setup_seconds = setup + (f.sections.count("setup") ? f.sections.at("setup") : 0.0);
   r.total_seconds = setup + f.total_seconds;
-  int builds = 0;
+  int builds = 0, tangent_assemblies = 0, residual_only_assemblies = 0;
   for (const auto& s : f.steps) {
+    tangent_assemblies += s.tangent_assemblies;
+    residual_only_assemblies += s.residual_only_assemblies;
     r.steps.push_back({s.step, s.time, s.wall_seconds, s.assembly_seconds, s.solve_seconds, s.newton_iterations,
                        s.residuals, s.linear_iterations, s.substeps, s.failed_attempts, s.admissibility_margin,
                        s.retried_plain});
     builds += s.preconditioner_builds;
   }
   r.details["preconditioner_builds"] = builds;
+  r.details["tangent_assemblies"] = tangent_assemblies;
+  r.details["residual_only_assemblies"] = residual_only_assemblies;
   r.details["linear_solver"] =
       c.fem.linear_solver == "direct"
           ? "GMRES (right-preconditioned by UMFPACK LU of an earlier consistent tangent)"
