@@ -1,6 +1,8 @@
 // `tissue reproduce --jobs 2` runs Table 1's cases side by side, each `tissue compare` a child process with one
 // thread: its Table 1 must be the one that the cases give one after the other in the reproduce process (--jobs 1),
 // which would not hold if the children were handed other compare options (the reference's error bar, the cut effect).
+// With the timing too, the timing's surrogate is trained beside the cases by `tissue fit` and read from its file: it
+// must answer as the one trained in the reproduce process.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -39,6 +41,15 @@ int reproduce(const fs::path& plan, int jobs, const fs::path& out) {
   const std::string command = std::string(TISSUE_BINARY) + " reproduce --plan " + plan.string() +
                               " --table1-only --no-plot --jobs " + std::to_string(jobs) + " --out " + out.string() +
                               " > " + out.string() + ".log 2>&1";
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// Run `tissue reproduce` on `plan` (Table 1 and the timing, no plots) with `jobs` into `out`; returns its exit code.
+int reproduce_all(const fs::path& plan, int jobs, const fs::path& out) {
+  const std::string command = std::string(TISSUE_BINARY) + " reproduce --plan " + plan.string() +
+                              " --no-plot --jobs " + std::to_string(jobs) + " --out " + out.string() + " > " +
+                              out.string() + ".log 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -108,4 +119,47 @@ TEST(ReproduceSideBySide, Table1IsTheSameAsOneCaseAfterTheOther) {
   const std::string md = read_text(dir / "side_by_side/table1.md");
   EXPECT_NE(md.find("The cases ran side by side, 2 at once"), std::string::npos);
   EXPECT_FALSE(fs::exists(dir / "side_by_side/small.log")) << "a succeeded child's log is removed";
+}
+
+TEST(ReproduceSideBySide, TheSurrogateTrainedBesideTable1AnswersAsOneTrainedAfterIt) {
+  // The smallest plan with a surrogate: configs/lung_surrogate.json (20 mm cloud, 2 steps) as both Table 1 cases, the
+  // timing case and the surrogate's case. About 35 s per run on 2 cores.
+  const fs::path dir = fs::temp_directory_path() / "tissue_reproduce_surrogate_beside";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string config = kConfigDir + "/lung_surrogate.json";
+  const json paper = {{"enrichment_mm", 1.05}, {"visibility_mm", 4.01}};
+  const fs::path plan = dir / "plan.json";
+  std::ofstream(plan) << json{{"table1",
+                               {{{"label", "first"}, {"config", config}, {"paper", paper}},
+                                {{"label", "second"}, {"config", config}, {"paper", paper}}}},
+                              {"timing",
+                               {{"config", config}, {"forces_N", {0.1}}, {"models", {"enrichment"}},
+                                {"surrogate", config}}}}
+                                 .dump(2);
+  ASSERT_EQ(reproduce_all(plan, 1, dir / "after"), 0) << read_text(dir / "after.log");
+  ASSERT_EQ(reproduce_all(plan, 2, dir / "beside"), 0) << read_text(dir / "beside.log");
+
+  const std::string log = read_text(dir / "beside.log");
+  EXPECT_NE(log.find("the timing's surrogate: tissue fit: started beside the others"), std::string::npos) << log;
+  const json after = read_json(dir / "after/timing.json").at("surrogate");
+  const json beside = read_json(dir / "beside/timing.json").at("surrogate");
+  ASSERT_EQ(after.at("status"), "measured") << after;
+  ASSERT_EQ(beside.at("status"), "measured") << beside;
+  EXPECT_NE(beside.at("trained").get<std::string>().find("tissue fit"), std::string::npos);
+  EXPECT_NE(after.at("trained").get<std::string>().find("here"), std::string::npos);
+  EXPECT_EQ(beside.at("training_solves"), 18);  // 6 directions x 1 contact x 3 levels
+  EXPECT_EQ(after.at("training_solves"), 18);
+  EXPECT_GT(beside.at("training_seconds").get<double>(), 0.0);
+  // The same answer: the contact displacement at each force (measured 5e-11 relative apart; one thread against two
+  // changes the order of some sums).
+  ASSERT_EQ(after.at("rows").size(), beside.at("rows").size());
+  for (std::size_t i = 0; i < after.at("rows").size(); ++i)
+    expect_close(after.at("rows")[i].at("contact_displacement_mm"), beside.at("rows")[i].at("contact_displacement_mm"),
+                 "contact displacement", 1e-8);
+  EXPECT_TRUE(fs::exists(dir / "beside/surrogate.json")) << "the trained file is kept with the results";
+  EXPECT_FALSE(fs::exists(dir / "after/surrogate.json"));
+  EXPECT_FALSE(fs::exists(dir / "beside/surrogate_fit.log")) << "a succeeded child's log is removed";
+  EXPECT_NE(read_text(dir / "beside/timing.md").find("by `tissue fit` at one thread while Table 1 ran"),
+            std::string::npos);
 }

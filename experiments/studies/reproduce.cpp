@@ -30,6 +30,7 @@
 #include "meshless/efg/efg_problem.hpp"
 #include "meshless/surrogate/surrogate.hpp"
 #include "meshless/surrogate/surrogate_builder.hpp"
+#include "meshless/surrogate/surrogate_file.hpp"
 
 namespace experiments {
 
@@ -312,31 +313,49 @@ json time_one_force(const core::Case& c, double force, std::vector<TimedSeries>&
   return row;
 }
 
-/// Train the surrogate of `config` (as `tissue fit` does) and query it at `stressed`'s load point for each force
-/// along its force direction: the median wall time of a query over many repetitions, and the answer.
+/// The surrogate of `config`, trained here (as `tissue fit` does) or, when `trained_file` is given, read from the file
+/// `tissue fit` wrote beside Table 1 (checked against the case's hash), then queried at `stressed`'s load point for
+/// each force along its force direction: the median wall time of a query over many repetitions, and the answer.
 json time_surrogate(const std::string& config, const core::Case& stressed, const std::vector<double>& forces,
-                    Progress* progress) {
+                    const std::string& trained_file, Progress* progress) {
   const core::Case c = core::load_case(config);
-  progress->step(fmt::format("timing: training the surrogate of {} ({} full solves, as tissue fit)", config,
-                             6 * c.surrogate.contact_points.size() * c.surrogate.force_levels));
-  const auto t0 = std::chrono::steady_clock::now();
-  core::GeometryOptions geometry;
-  geometry.build_fem_mesh = false;
-  const core::Geometry g = core::build_geometry(c, geometry);
-  meshless::SurrogateBuildReport report;
-  const meshless::Surrogate surrogate(
-      meshless::build_surrogate(meshless::problem_from_case(c, g), c.surrogate, {}, {}, &report));
-  const double training_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::optional<meshless::Surrogate> surrogate;
+  int training_solves = 0;
+  double training_seconds = 0.0;
+  std::string trained;
+  if (trained_file.empty()) {
+    progress->step(fmt::format("timing: training the surrogate of {} ({} full solves, as tissue fit)", config,
+                               6 * c.surrogate.contact_points.size() * c.surrogate.force_levels));
+    const auto t0 = std::chrono::steady_clock::now();
+    core::GeometryOptions geometry;
+    geometry.build_fem_mesh = false;
+    const core::Geometry g = core::build_geometry(c, geometry);
+    meshless::SurrogateBuildReport report;
+    surrogate.emplace(meshless::build_surrogate(meshless::problem_from_case(c, g), c.surrogate, {}, {}, &report));
+    training_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    training_solves = report.training_solves;
+    trained = "here, before the queries (geometry included)";
+  } else {
+    meshless::SurrogateData data = meshless::read_surrogate(trained_file, meshless::surrogate_case_hash(c));
+    const json& report = data.report;
+    training_solves = report.at("training").at("solves").get<int>();
+    training_seconds = report.at("training").at("wall_seconds").get<double>() +
+                       report.at("fit_seconds").get<double>() + report.at("holdout_wall_seconds").get<double>();
+    trained = fmt::format("by `tissue fit` at one thread while Table 1 ran (training, fits and held-out checks; "
+                          "{})", std::filesystem::path(trained_file).filename().string());
+    surrogate.emplace(std::move(data));
+  }
 
   progress->step(fmt::format("timing: {} surrogate queries per force", kQueriesPerForce));
-  const json rows = surrogate_query_timing(surrogate, stressed.load.point, stressed.load.force.normalized(), forces,
+  const json rows = surrogate_query_timing(*surrogate, stressed.load.point, stressed.load.force.normalized(), forces,
                                            kQueriesPerForce);
   return {{"status", "measured"},
           {"config", config},
           {"node_spacing_mm", 1e3 * c.meshless.node_spacing},
-          {"surface_nodes", surrogate.num_surface_nodes()},
-          {"training_solves", report.training_solves},
+          {"surface_nodes", surrogate->num_surface_nodes()},
+          {"training_solves", training_solves},
           {"training_seconds", training_seconds},
+          {"trained", trained},
           {"queries_per_force", kQueriesPerForce},
           {"rows", rows}};
 }
@@ -571,12 +590,13 @@ std::string timing_md(const json& timing) {
   if (measured)
     md += fmt::format(
         "\nThe surrogate (paper §3, docs/SURROGATE.md) is trained on `{}` ({:.0f} mm node spacing, {} surface "
-        "nodes), once, in {} full solves and {:.1f} s; a query is the median of {} calls, answering the contact "
+        "nodes), once, in {} full solves and {:.1f} s, {}; a query is the median of {} calls, answering the contact "
         "displacement and every surface node's. |u| is its contact node's displacement at the end of its "
         "training ramp.\n",
         surrogate.at("config").get<std::string>(), surrogate.at("node_spacing_mm").get<double>(),
         surrogate.at("surface_nodes").get<int>(), surrogate.at("training_solves").get<int>(),
-        surrogate.at("training_seconds").get<double>(), surrogate.at("queries_per_force").get<int>());
+        surrogate.at("training_seconds").get<double>(), surrogate.value("trained", std::string("here")),
+        surrogate.at("queries_per_force").get<int>());
   return md;
 }
 
@@ -712,7 +732,7 @@ json table1_row_of(const ReproducePlan::Table1Case& t, const core::OutputDirecto
 /// Table 1's rows: each case's `tissue compare`, in this process one after the other, or side by side in child
 /// processes (ReproduceOptions::jobs), each kept to its share of the cores.
 json table1_rows(const ReproducePlan& plan, const ReproduceOptions& options, const core::OutputDirectory& out,
-                 Progress* progress) {
+                 const std::optional<ChildJob>& beside, ProcessOutcome* beside_outcome, Progress* progress) {
   json rows = json::array();
   const int children = options.table1_children(static_cast<int>(plan.table1.size()));
   if (children == 1) {
@@ -729,10 +749,16 @@ json table1_rows(const ReproducePlan& plan, const ReproduceOptions& options, con
     jobs.push_back({fmt::format("Table 1, {}", t.label),
                     compare_command_line(options.tissue_binary, t.config, table1_compare_options(t, options, out)),
                     out.file(t.label + ".log").string()});
+  if (beside) jobs.push_back(*beside);  // last: it starts in the slot the first case to end frees
   SideBySideOptions side;
   side.children = children;
   side.threads_per_child = threads_per_child(children);
-  const std::vector<ProcessOutcome> outcomes = run_side_by_side(jobs, side, progress);
+  std::vector<ProcessOutcome> outcomes = run_side_by_side(jobs, side, progress);
+  if (beside) {
+    *beside_outcome = outcomes.back();
+    outcomes.pop_back();
+    jobs.pop_back();
+  }
   std::string failures;
   for (std::size_t i = 0; i < jobs.size(); ++i)
     if (!outcomes[i].ok()) {
@@ -788,13 +814,25 @@ int run_reproduce(const ReproduceOptions& options) {
   const int n_forces = static_cast<int>(plan.timing.forces.size());
   const int n_timed = static_cast<int>(timed.size());
   const bool with_surrogate = !plan.timing.surrogate_config.empty();
+  // Only the surrogate's queries are timed, not its training; so when Table 1's cases run side by side, `tissue fit`
+  // trains it beside them, at one thread in the slot the shorter case frees, and the timing reads its file.
+  const bool fit_beside = options.table1 && options.timing && with_surrogate &&
+                          options.table1_children(static_cast<int>(plan.table1.size())) > 1;
   Progress progress("reproduce", (options.table1 ? static_cast<int>(plan.table1.size()) : 0) +
                                      (options.timing ? 2 + n_timed * (n_forces + 1) + 2 * with_surrogate : 0) + 1);
+  // (With fit_beside the training's step is the fit job's start in Table 1's side-by-side run.)
   core::OutputDirectory out(options.out_dir);
   write_text_file(out.file("plan.json").string(), read_json_file(options.plan).dump(2) + "\n");
 
+  std::optional<ChildJob> fit_job;
+  ProcessOutcome fit_outcome;
+  if (fit_beside)
+    fit_job = ChildJob{"the timing's surrogate: tissue fit",
+                       {options.tissue_binary, "fit", plan.timing.surrogate_config, "--out",
+                        out.file("surrogate.json").string(), "--workers", "1"},
+                       out.file("surrogate_fit.log").string()};
   if (options.table1) {
-    const json rows = table1_rows(plan, options, out, &progress);
+    const json rows = table1_rows(plan, options, out, fit_job, &fit_outcome, &progress);
     write_text_file(out.file("table1.json").string(), json{{"rows", rows}}.dump(2) + "\n");
     const std::string md = table1_md(rows);
     write_text_file(out.file("table1.md").string(), md);
@@ -831,7 +869,15 @@ int run_reproduce(const ReproduceOptions& options) {
       timing["rows"].push_back(time_one_force(case_at_force(timing_case, f, plan.timing.steps), f, series, &progress));
     if (with_surrogate) {
       try {
-        timing["surrogate"] = time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces, &progress);
+        if (fit_job && !fit_outcome.ok())  // its log stays in the results for the cause
+          throw std::runtime_error(fmt::format("tissue fit {} beside Table 1: {} (the end of surrogate_fit.log: {})",
+                                               plan.timing.surrogate_config,
+                                               child_failure(fit_outcome, fit_job->log_file),
+                                               tail_of_file(fit_job->log_file, 3)));
+        timing["surrogate"] =
+            time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces,
+                           fit_job ? out.file("surrogate.json").string() : std::string(), &progress);
+        if (fit_job) std::filesystem::remove(fit_job->log_file);  // it succeeded: the file and timing.md tell
       } catch (const std::exception& e) {  // recorded like a failed model run; the rest of the timing stands
         timing["surrogate"] = {{"status", std::string("failed: ") + e.what()}};
       }
