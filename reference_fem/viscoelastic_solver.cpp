@@ -267,9 +267,8 @@ void ViscoelasticSolver::apply_dirichlet_values(double t_new) {
 }
 
 void ViscoelasticSolver::local_assemble(const typename DoFHandler<3>::active_cell_iterator& cell,
-                                        ScratchData& scratch, CopyData& copy) const {
+                                        ScratchData& scratch, CopyData& copy, bool tangent) const {
   const unsigned int n = fe_.n_dofs_per_cell();
-  const bool tangent = assemble_tangent_;
   if (tangent) copy.cell_matrix.reinit(n, n);
   copy.cell_rhs.reinit(n);
   copy.cell_external.reinit(n);
@@ -365,13 +364,11 @@ double ViscoelasticSolver::assemble_system(double t_new, double dt, bool with_ta
   TimerOutput::Scope scope(timer_, "assembly");
   step_time_ = t_new;
   step_dt_ = dt;
-  assemble_tangent_ = with_tangent;
   const unsigned int degree = static_cast<unsigned int>(parameters_.degree);
   ScratchData scratch(mapping_, fe_, QGaussSimplex<3>(degree + 1), QGaussSimplex<2>(degree + 1));
   iterate_margin_ = core::SmallestMargin{};
-  const auto local = [this](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s, CopyData& c) {
-    local_assemble(cell, s, c);
-  };
+  const auto local = [this, with_tangent](const typename DoFHandler<3>::active_cell_iterator& cell, ScratchData& s,
+                                          CopyData& c) { local_assemble(cell, s, c, with_tangent); };
   // WorkStream's serial stage: one cell's rows into the global objects (deal.II's on one process, Trilinos's else).
   const auto add_cell = [this, with_tangent](const CopyData& c, auto& matrix, auto& rhs, auto& external,
                                              auto& internal) {

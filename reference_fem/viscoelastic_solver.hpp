@@ -135,8 +135,9 @@ class ViscoelasticSolver {
   /// The last assembly's smallest margin as an error when it is outside the admissible range, else null.
   std::shared_ptr<const core::InadmissibleStrain> inadmissible_iterate(double t_new) const;
   void update_history(double dt);
+  /// One cell's residual rows, and its tangent when `tangent` (assemble_system's with_tangent).
   void local_assemble(const typename dealii::DoFHandler<3>::active_cell_iterator& cell, ScratchData& scratch,
-                      CopyData& copy) const;
+                      CopyData& copy, bool tangent) const;
 
   /// The preconditioner of the next GMRES solves, from the current tangent (LU factors or AMG hierarchy).
   void build_preconditioner();
@@ -173,7 +174,6 @@ class ViscoelasticSolver {
   bool rebuild_ = true;
   int last_linear_iterations_ = 0;
   double last_linear_reduction_ = 1.0;  // ||K du - R|| / ||R|| that the last solve reached
-  bool assemble_tangent_ = true;        // of the assembly being run (read by the workers, as step_time_)
   int preconditioner_builds_ = 0;
 
   std::vector<PointHistory> history_;  // active_cell_index * n_q + q, filled on locally owned cells only

@@ -36,20 +36,12 @@ std::string read_text(const fs::path& file) {
   return s.str();
 }
 
-/// Run `tissue reproduce` on `plan` (Table 1 only, no plots) with `jobs` into `out`; returns its exit code.
-int reproduce(const fs::path& plan, int jobs, const fs::path& out) {
+/// Run `tissue reproduce` on `plan` (no plots; Table 1 only unless `with_timing`) with `jobs` into `out`; returns its
+/// exit code.
+int reproduce(const fs::path& plan, int jobs, const fs::path& out, bool with_timing = false) {
   const std::string command = std::string(TISSUE_BINARY) + " reproduce --plan " + plan.string() +
-                              " --table1-only --no-plot --jobs " + std::to_string(jobs) + " --out " + out.string() +
-                              " > " + out.string() + ".log 2>&1";
-  const int status = std::system(command.c_str());
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-/// Run `tissue reproduce` on `plan` (Table 1 and the timing, no plots) with `jobs` into `out`; returns its exit code.
-int reproduce_all(const fs::path& plan, int jobs, const fs::path& out) {
-  const std::string command = std::string(TISSUE_BINARY) + " reproduce --plan " + plan.string() +
-                              " --no-plot --jobs " + std::to_string(jobs) + " --out " + out.string() + " > " +
-                              out.string() + ".log 2>&1";
+                              (with_timing ? "" : " --table1-only") + " --no-plot --jobs " + std::to_string(jobs) +
+                              " --out " + out.string() + " > " + out.string() + ".log 2>&1";
   const int status = std::system(command.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
@@ -137,8 +129,8 @@ TEST(ReproduceSideBySide, TheSurrogateTrainedBesideTable1AnswersAsOneTrainedAfte
                                {{"config", config}, {"forces_N", {0.1}}, {"models", {"enrichment"}},
                                 {"surrogate", config}}}}
                                  .dump(2);
-  ASSERT_EQ(reproduce_all(plan, 1, dir / "after"), 0) << read_text(dir / "after.log");
-  ASSERT_EQ(reproduce_all(plan, 2, dir / "beside"), 0) << read_text(dir / "beside.log");
+  ASSERT_EQ(reproduce(plan, 1, dir / "after", true), 0) << read_text(dir / "after.log");
+  ASSERT_EQ(reproduce(plan, 2, dir / "beside", true), 0) << read_text(dir / "beside.log");
 
   const std::string log = read_text(dir / "beside.log");
   EXPECT_NE(log.find("the timing's surrogate: tissue fit: started beside the others"), std::string::npos) << log;

@@ -826,10 +826,11 @@ int run_reproduce(const ReproduceOptions& options) {
 
   std::optional<ChildJob> fit_job;
   ProcessOutcome fit_outcome;
+  const std::string fitted_file = fit_beside ? out.file("surrogate.json").string() : std::string();
   if (fit_beside)
     fit_job = ChildJob{"the timing's surrogate: tissue fit",
-                       {options.tissue_binary, "fit", plan.timing.surrogate_config, "--out",
-                        out.file("surrogate.json").string(), "--workers", "1"},
+                       {options.tissue_binary, "fit", plan.timing.surrogate_config, "--out", fitted_file, "--workers",
+                        "1"},
                        out.file("surrogate_fit.log").string()};
   if (options.table1) {
     const json rows = table1_rows(plan, options, out, fit_job, &fit_outcome, &progress);
@@ -875,8 +876,7 @@ int run_reproduce(const ReproduceOptions& options) {
                                                child_failure(fit_outcome, fit_job->log_file),
                                                tail_of_file(fit_job->log_file, 3)));
         timing["surrogate"] =
-            time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces,
-                           fit_job ? out.file("surrogate.json").string() : std::string(), &progress);
+            time_surrogate(plan.timing.surrogate_config, timing_case, plan.timing.forces, fitted_file, &progress);
         if (fit_job) std::filesystem::remove(fit_job->log_file);  // it succeeded: the file and timing.md tell
       } catch (const std::exception& e) {  // recorded like a failed model run; the rest of the timing stands
         timing["surrogate"] = {{"status", std::string("failed: ") + e.what()}};
